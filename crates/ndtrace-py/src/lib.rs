@@ -1,0 +1,19 @@
+//! Python bindings of ndtrace: a thin layer that moves numpy buffers in and out of the pure-Rust
+//! core, releases the GIL while the core works, and converts core errors in one place
+//! ([`errors`]). Argument checking that speaks numpy (shapes, broadcasting) lives in the Python
+//! package `ndtrace`; the kernels here re-check sizes through the core's batch layer.
+
+use pyo3::prelude::*;
+
+mod errors;
+mod geometry;
+
+/// The compiled part of ndtrace. Use the `ndtrace` package, not this module.
+#[pymodule]
+fn _ndtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("MIN_DIM", ndtrace::MIN_DIM)?;
+    m.add("MAX_DIM", ndtrace::MAX_DIM)?;
+    geometry::register(m)?;
+    Ok(())
+}

@@ -1,0 +1,676 @@
+//! N-dimensional geometry of the course notes (paper "Geometry for N-Dimensional Graphics").
+//!
+//! Points and vectors are `[f64; N]`; a simplex is a slice of its vertices `x_0 … x_K`.
+//!
+//! ## Conventions
+//! * Edges are `x_k − x_0`; matrices built from edges hold them as **columns**, with `x_0` the
+//!   origin, exactly as eqs. 2–3 require for a consistent right-hand rule in every N.
+//! * The normal of an (N−1)-simplex is the generalized cross product of its edges (eq. 6); it
+//!   satisfies `det[e_1 … e_{N−1} | v] = v · N` for every v, so `det[e_1 … e_{N−1} | N] = |N|² ≥ 0`.
+//! * "Above" a hyperplane is the side its normal points to: `side(x) = sign V_N(x_0 … x_{N−1}, x)`.
+//!
+//! ## Degenerate input
+//! A simplex is *degenerate* when its K-volume is negligible against its edge lengths:
+//! `W_K ≤ DEGENERACY_TOLERANCE · Π|e_k|` (W_K the parallelepiped volume, eq. 5; the ratio is 1
+//! for orthogonal edges and 0 for dependent ones, and does not change under scaling). A ray or
+//! segment is *parallel* to a hyperplane when `|n̂ · d| ≤ DEGENERACY_TOLERANCE · |d|`.
+//! * [`generalized_cross`], [`signed_volume`], [`gram_volume`], [`transform_normal`] are always
+//!   defined: degenerate input gives a zero (or near-zero) normal or volume.
+//! * [`side`] returns 0 for a degenerate hyperplane (every point is "on" it).
+//! * [`hyperplane`], [`point_hyperplane_distance`], [`barycentric`], [`clip_segment`] and
+//!   [`ray_hyperplane`] return `Err(Degenerate)` — they have no meaningful value.
+
+use crate::linalg::{
+    add_scaled, cofactor_matrix, det_block, det_block_in_place, dot, factorial, mat_vec, minor,
+    norm, scale, solve_block, sub, Matrix, Vector,
+};
+
+/// Relative tolerance below which a simplex counts as degenerate or a direction as parallel.
+pub const DEGENERACY_TOLERANCE: f64 = 1e-12;
+
+/// Why a geometric query has no meaningful answer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Degenerate {
+    /// The points are repeated or affinely dependent: the simplex has no volume.
+    Simplex,
+    /// The segment or ray is parallel to the hyperplane (or has zero length).
+    Parallel,
+}
+
+impl Degenerate {
+    /// A short human-readable reason.
+    pub fn reason(self) -> &'static str {
+        match self {
+            Degenerate::Simplex => "degenerate simplex (repeated or affinely dependent points)",
+            Degenerate::Parallel => "direction parallel to the hyperplane (or of zero length)",
+        }
+    }
+}
+
+/// The edges `x_k − x_0`, k = 1 … K, of a simplex given by its K+1 points.
+#[inline]
+fn edges<const N: usize>(points: &[Vector<N>], out: &mut [Vector<N>]) {
+    for (k, e) in out.iter_mut().enumerate() {
+        *e = sub(&points[k + 1], &points[0]);
+    }
+}
+
+/// Product of the edge lengths, the scale against which volumes are judged degenerate.
+#[inline]
+fn edge_length_product<const N: usize>(edges: &[Vector<N>]) -> f64 {
+    edges.iter().map(norm).product()
+}
+
+/// Generalized cross product of N−1 edge vectors (eq. 6): the cofactors of the last column of
+/// `[x_1−x_0 … x_{N−1}−x_0 | x̂_1 … x̂_N]`, i.e. `N_i = (−1)^(i+N) det(E without row i)` with the
+/// edges as columns of E.
+///
+/// It is orthogonal to every edge, `det[e_1 … e_{N−1} | N] = |N|² > 0` for independent edges,
+/// and `|N|² = det(Gram) = ((N−1)!·V_{N−1})²` (eqs. 5 and 8). The edges e_1 … e_{N−1} give +e_N;
+/// in 2D the edge (a, b) gives (−b, a). Dependent edges give the zero vector.
+///
+/// # Panics
+/// If `edges.len() != N − 1` (a programming error; the batch layer checks shapes).
+pub fn generalized_cross<const N: usize>(edges: &[Vector<N>]) -> Vector<N> {
+    assert_eq!(edges.len(), N - 1, "generalized_cross needs N−1 edges");
+    // E with the edges as its first N−1 columns; column N is the slot of the unit vectors.
+    let mut e: Matrix<N> = [[0.0; N]; N];
+    for (c, edge) in edges.iter().enumerate() {
+        for r in 0..N {
+            e[r][c] = edge[r];
+        }
+    }
+    // Expand along the last column: N_i = (−1)^(i+N) · det(minor without row i, column N).
+    std::array::from_fn(|i| {
+        let sign = if (i + N - 1).is_multiple_of(2) { 1.0 } else { -1.0 };
+        sign * det_block(&minor(&e, N, i, N - 1), N - 1)
+    })
+}
+
+/// Generalized cross product of the simplex `x_0 … x_{N−1}` (eq. 6 with edges `x_k − x_0`).
+pub fn simplex_normal<const N: usize>(points: &[Vector<N>]) -> Vector<N> {
+    assert_eq!(points.len(), N, "an (N−1)-simplex has N points");
+    let mut e = [[0.0; N]; N];
+    edges(points, &mut e[..N - 1]);
+    generalized_cross(&e[..N - 1])
+}
+
+/// Signed N-volume of the N-simplex `x_0 … x_N` (eqs. 2–3):
+/// `V_N = det[x_1−x_0 … x_N−x_0] / N!`. The standard simplex (origin, then the unit vectors)
+/// has `+1/N!` in every N; swapping two vertices flips the sign.
+pub fn signed_volume<const N: usize>(points: &[Vector<N>]) -> f64 {
+    assert_eq!(points.len(), N + 1, "an N-simplex has N+1 points");
+    let mut m: Matrix<N> = [[0.0; N]; N];
+    for c in 0..N {
+        for r in 0..N {
+            m[r][c] = points[c + 1][r] - points[0][r];
+        }
+    }
+    det_block_in_place(&mut m, N) / factorial(N)
+}
+
+/// The Gram matrix `G_ab = e_a · e_b` of K edges, in the leading K × K block.
+fn gram<const N: usize>(e: &[Vector<N>]) -> Matrix<N> {
+    let mut g: Matrix<N> = [[0.0; N]; N];
+    for a in 0..e.len() {
+        for b in a..e.len() {
+            let v = dot(&e[a], &e[b]);
+            g[a][b] = v;
+            g[b][a] = v;
+        }
+    }
+    g
+}
+
+/// Unsigned K-volume of the K-simplex `x_0 … x_K` in R^N, 1 ≤ K ≤ N (eqs. 4–5):
+/// `V_K = √det(G) / K!` with G the Gram matrix of the edges `x_k − x_0`.
+pub fn gram_volume<const N: usize>(points: &[Vector<N>]) -> f64 {
+    let k = points.len() - 1;
+    assert!((1..=N).contains(&k), "a K-simplex in R^N needs 2..=N+1 points");
+    let mut e = [[0.0; N]; N];
+    edges(points, &mut e[..k]);
+    det_block_in_place(&mut gram(&e[..k]), k).max(0.0).sqrt() / factorial(k)
+}
+
+/// An oriented hyperplane `n̂ · x = c` (eq. 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hyperplane<const N: usize> {
+    /// Unit normal, the direction of the generalized cross product (eq. 6).
+    pub normal: Vector<N>,
+    /// Offset `c = n̂ · x_0`.
+    pub offset: f64,
+}
+
+impl<const N: usize> Hyperplane<N> {
+    /// Signed distance `n̂ · x − c` (eq. 11 as `h = n̂·(x − x_0)`).
+    #[inline]
+    pub fn distance(&self, x: &Vector<N>) -> f64 {
+        dot(&self.normal, x) - self.offset
+    }
+}
+
+/// The hyperplane through the N points `x_0 … x_{N−1}` (eq. 1), its unit normal the direction
+/// of [`generalized_cross`] of the edges, its offset `c = n̂ · x_0`.
+pub fn hyperplane<const N: usize>(points: &[Vector<N>]) -> Result<Hyperplane<N>, Degenerate> {
+    assert_eq!(points.len(), N, "a hyperplane needs N points");
+    let mut e = [[0.0; N]; N];
+    edges(points, &mut e[..N - 1]);
+    let n = generalized_cross(&e[..N - 1]);
+    let len = norm(&n);
+    if !(len > DEGENERACY_TOLERANCE * edge_length_product(&e[..N - 1])) {
+        return Err(Degenerate::Simplex);
+    }
+    let normal = scale(&n, 1.0 / len);
+    Ok(Hyperplane { normal, offset: dot(&normal, &points[0]) })
+}
+
+/// Signed distance from `x` to the hyperplane of `x_0 … x_{N−1}` and the foot point (eq. 11):
+/// `h = n̂·(x − x_0) = N·V_N / V_{N−1}` with V_N the signed volume of `(x_0, …, x_{N−1}, x)`, and
+/// `p = x − h·n̂` (the closest point of the hyperplane).
+pub fn point_hyperplane_distance<const N: usize>(
+    x: &Vector<N>,
+    points: &[Vector<N>],
+) -> Result<(f64, Vector<N>), Degenerate> {
+    let plane = hyperplane(points)?;
+    let h = dot(&plane.normal, &sub(x, &points[0]));
+    Ok((h, add_scaled(x, -h, &plane.normal)))
+}
+
+/// Barycentric coordinates `t_0 … t_K` of `x` with respect to the K-simplex `x_0 … x_K`,
+/// K ≤ N, written into `out[..=K]` (section "Barycentric Coordinates").
+///
+/// Uses the invariant squared-volume (Gram/Cramer) form: `t_1 … t_K` solve
+/// `Σ_b (e_a·e_b) t_b = e_a·(x − x_0)` and `t_0 = 1 − Σ t_k`. For K < N this gives the
+/// coordinates of the orthogonal projection of `x` onto the simplex's affine hull.
+pub fn barycentric<const N: usize>(
+    x: &Vector<N>,
+    points: &[Vector<N>],
+    out: &mut [f64],
+) -> Result<(), Degenerate> {
+    let k = points.len() - 1;
+    assert!(k <= N && out.len() > k, "barycentric: K ≤ N and room for K+1 coordinates");
+    if k == 0 {
+        out[0] = 1.0;
+        return Ok(());
+    }
+    let mut e = [[0.0; N]; N];
+    edges(points, &mut e[..k]);
+    let g = gram(&e[..k]);
+    // Degenerate when det G = W_K² is negligible against Π|e_k|².
+    let w2 = det_block(&g, k);
+    let scale2 = edge_length_product(&e[..k]).powi(2);
+    if !(w2 > DEGENERACY_TOLERANCE * DEGENERACY_TOLERANCE * scale2) {
+        return Err(Degenerate::Simplex);
+    }
+    let d = sub(x, &points[0]);
+    let mut rhs = [0.0; N];
+    for a in 0..k {
+        rhs[a] = dot(&e[a], &d);
+    }
+    let t = solve_block(g, rhs, k).ok_or(Degenerate::Simplex)?;
+    let mut t0 = 1.0;
+    for a in 0..k {
+        out[a + 1] = t[a];
+        t0 -= t[a];
+    }
+    out[0] = t0;
+    Ok(())
+}
+
+/// Side of `x` relative to the hyperplane of `x_0 … x_{N−1}` (section "Clipping"): the sign of
+/// `V_N(x_0, …, x_{N−1}, x)` with x last — +1 above (the side the normal points to), −1 below,
+/// 0 on it (within `DEGENERACY_TOLERANCE` relative to the simplex's size and x's distance from
+/// x_0), and 0 when the hyperplane is degenerate.
+pub fn side<const N: usize>(x: &Vector<N>, points: &[Vector<N>]) -> i8 {
+    assert_eq!(points.len(), N, "a hyperplane needs N points");
+    let mut e = [[0.0; N]; N];
+    edges(points, &mut e[..N - 1]);
+    let n = generalized_cross(&e[..N - 1]);
+    let d = sub(x, &points[0]);
+    // N!·V_N = det[e_1 … e_{N−1} | x − x_0] = N · (x − x_0).
+    let w = dot(&n, &d);
+    let scale = edge_length_product(&e[..N - 1]) * norm(&d);
+    if w.abs() <= DEGENERACY_TOLERANCE * scale {
+        0
+    } else if w > 0.0 {
+        1
+    } else {
+        -1
+    }
+}
+
+/// Parameter t at which the line `x(t) = a + t·(b − a)` crosses the hyperplane of
+/// `x_0 … x_{N−1}` (eq. 10): `t = n̂·(a − x_0) / n̂·(a − b)`. The segment itself crosses when
+/// `0 ≤ t ≤ 1`; values outside mean the crossing lies on the line beyond the segment.
+pub fn clip_segment<const N: usize>(
+    a: &Vector<N>,
+    b: &Vector<N>,
+    points: &[Vector<N>],
+) -> Result<f64, Degenerate> {
+    let plane = hyperplane(points)?;
+    let ab = sub(a, b);
+    let den = dot(&plane.normal, &ab);
+    if !(den.abs() > DEGENERACY_TOLERANCE * norm(&ab)) {
+        return Err(Degenerate::Parallel);
+    }
+    Ok(dot(&plane.normal, &sub(a, &points[0])) / den)
+}
+
+/// Ray parameter of the hit with the hyperplane of `x_0 … x_{N−1}` (section "Ray Tracing"):
+/// with `X(t) = C + t·(P − C)` and `P − C = direction`, `t = n̂·(x_0 − C) / n̂·(P − C)`.
+/// t is in units of `direction` (not normalized); negative t lies behind the origin.
+pub fn ray_hyperplane<const N: usize>(
+    origin: &Vector<N>,
+    direction: &Vector<N>,
+    points: &[Vector<N>],
+) -> Result<f64, Degenerate> {
+    let plane = hyperplane(points)?;
+    let den = dot(&plane.normal, direction);
+    if !(den.abs() > DEGENERACY_TOLERANCE * norm(direction)) {
+        return Err(Degenerate::Parallel);
+    }
+    Ok(dot(&plane.normal, &sub(&points[0], origin)) / den)
+}
+
+/// Transforms a normal by the linear map `m` ("Are Normals Vectors? Almost!"): normals are
+/// pseudotensors, so the generalized cross product of the transformed edges is `cof(m)·N`, with
+/// `cof(m) = det(m)·m^(−T)` the cofactor matrix. For an orthogonal R this is `det(R)·R·N`:
+/// a reflection flips the normal relative to `R·N`. Defined for singular `m` too.
+pub fn transform_normal<const N: usize>(m: &Matrix<N>, normal: &Vector<N>) -> Vector<N> {
+    mat_vec(&cofactor_matrix(m), normal)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::exact::det_bareiss;
+    use crate::linalg::{add, det, mat_mul, transpose};
+    use crate::testutil::*;
+    use rand::Rng;
+
+    const TOL: f64 = 1e-9;
+
+    fn close(a: f64, b: f64, scale: f64) -> bool {
+        (a - b).abs() <= TOL * scale.max(1.0)
+    }
+
+    fn edge_vectors<const N: usize>(p: &[Vector<N>]) -> Vec<Vector<N>> {
+        p[1..].iter().map(|x| sub(x, &p[0])).collect()
+    }
+
+    fn cross_product_identities<const N: usize>() {
+        let mut r = rng(100 + N as u64);
+        for _ in 0..200 {
+            let e: Vec<Vector<N>> = random_points(&mut r, N - 1, 2.0);
+            let n = generalized_cross(&e);
+            // Orthogonal to each edge.
+            for edge in &e {
+                assert!(close(dot(&n, edge), 0.0, norm(&n) * norm(edge)), "N={N}: not orthogonal");
+            }
+            // |N|² equals the Gram determinant ((N−1)!·V_{N−1})².
+            let g = det_block(&gram(&e), N - 1);
+            assert!(close(dot(&n, &n), g, g), "N={N}: |N|²={} Gram={g}", dot(&n, &n));
+            let x0 = random_vector::<N>(&mut r, 3.0);
+            let mut pts = vec![x0];
+            pts.extend(e.iter().map(|x| add(x, &x0)));
+            let v = gram_volume(&pts) * factorial(N - 1);
+            assert!(close(dot(&n, &n), v * v, g), "N={N}: |N|² vs ((N−1)!V)²");
+            // det[edges | N] = |N|² > 0.
+            let mut m: Matrix<N> = [[0.0; N]; N];
+            for r_ in 0..N {
+                for c in 0..N - 1 {
+                    m[r_][c] = e[c][r_];
+                }
+                m[r_][N - 1] = n[r_];
+            }
+            let d = det(&m);
+            assert!(d > 0.0 && close(d, dot(&n, &n), d), "N={N}: det[edges|N]={d}");
+            // det[edges | v] = v·N for any v (the expansion that defines eq. 6).
+            let v = random_vector::<N>(&mut r, 1.0);
+            for r_ in 0..N {
+                m[r_][N - 1] = v[r_];
+            }
+            assert!(close(det(&m), dot(&v, &n), d.abs() + 1.0), "N={N}: expansion");
+            // Eq. 8: N(a)·N(b) = det[a_i · b_j].
+            let f: Vec<Vector<N>> = random_points(&mut r, N - 1, 2.0);
+            let nf = generalized_cross(&f);
+            let mut ab: Matrix<N> = [[0.0; N]; N];
+            for i in 0..N - 1 {
+                for j in 0..N - 1 {
+                    ab[i][j] = dot(&e[i], &f[j]);
+                }
+            }
+            let want = det_block(&ab, N - 1);
+            assert!(close(dot(&n, &nf), want, norm(&n) * norm(&nf)), "N={N}: eq. 8");
+        }
+    }
+
+    #[test]
+    fn generalized_cross_identities_in_every_dimension() {
+        for_each_dim!(cross_product_identities);
+    }
+
+    fn unit_edges_give_last_axis<const N: usize>() {
+        let e: Vec<Vector<N>> =
+            (0..N - 1).map(|k| std::array::from_fn(|i| if i == k { 1.0 } else { 0.0 })).collect();
+        let mut want = [0.0; N];
+        want[N - 1] = 1.0;
+        assert_eq!(generalized_cross(&e), want, "N={N}");
+        // Standard simplex: +1/N!.
+        let mut pts = vec![[0.0; N]];
+        pts.extend((0..N).map(|k| std::array::from_fn(|i| if i == k { 1.0 } else { 0.0 })));
+        assert!((signed_volume(&pts) - 1.0 / factorial(N)).abs() < 1e-15, "N={N}");
+        // Dependent edges give the zero normal and a degenerate hyperplane.
+        let mut dep = e.clone();
+        if N > 2 {
+            dep[1] = scale(&dep[0], 2.0);
+        } else {
+            dep[0] = [0.0; N];
+        }
+        assert_eq!(norm(&generalized_cross(&dep)), 0.0);
+        let mut p = vec![[0.5; N]];
+        p.extend(dep.iter().map(|x| add(x, &[0.5; N])));
+        assert_eq!(hyperplane(&p), Err(Degenerate::Simplex));
+        assert_eq!(side(&[7.0; N], &p), 0);
+    }
+
+    #[test]
+    fn unit_edges_and_standard_simplex() {
+        for_each_dim!(unit_edges_give_last_axis);
+        assert_eq!(generalized_cross::<2>(&[[3.0, 5.0]]), [-5.0, 3.0]);
+        // 3D: the familiar cross product (eq. 9).
+        assert_eq!(generalized_cross::<3>(&[[1., 2., 3.], [4., 5., 6.]]), [-3., 6., -3.]);
+    }
+
+    fn volume_identities<const N: usize>() {
+        let mut r = rng(200 + N as u64);
+        for _ in 0..200 {
+            let pts: Vec<Vector<N>> = random_points(&mut r, N + 1, 2.0);
+            let v = signed_volume(&pts);
+            // Swapping two vertices flips the sign.
+            let (i, j) = (r.random_range(0..=N), r.random_range(0..=N));
+            if i != j {
+                let mut sw = pts.clone();
+                sw.swap(i, j);
+                assert!(close(signed_volume(&sw), -v, v.abs()), "N={N}: swap {i}{j}");
+            }
+            // Invariance under rotation and translation; a reflection flips the sign.
+            let q = random_rotation::<N>(&mut r);
+            let t = random_vector::<N>(&mut r, 5.0);
+            let moved: Vec<Vector<N>> = pts.iter().map(|x| add(&mat_vec(&q, x), &t)).collect();
+            assert!(close(signed_volume(&moved), v, v.abs()), "N={N}: rotation");
+            let f = random_reflection::<N>(&mut r);
+            let refl: Vec<Vector<N>> = pts.iter().map(|x| mat_vec(&f, x)).collect();
+            assert!(close(signed_volume(&refl), -v, v.abs()), "N={N}: reflection");
+            // |V_N| equals the Gram volume for K = N (eq. 4).
+            assert!(close(gram_volume(&pts), v.abs(), v.abs()), "N={N}: gram K=N");
+            // Gram volumes of K-faces are rotation invariant and match the cross product for K = N−1.
+            for k in 1..=N {
+                let face = &pts[..=k];
+                let moved_face = &moved[..=k];
+                let a = gram_volume(face);
+                assert!(close(gram_volume(moved_face), a, a), "N={N} K={k}");
+            }
+            let n = simplex_normal(&pts[..N]);
+            assert!(close(norm(&n), factorial(N - 1) * gram_volume(&pts[..N]), norm(&n)));
+        }
+    }
+
+    #[test]
+    fn volume_identities_in_every_dimension() {
+        for_each_dim!(volume_identities);
+    }
+
+    fn exact_integer_volumes<const N: usize>() {
+        let mut r = rng(300 + N as u64);
+        for trial in 0..300 {
+            let mut ip: Vec<[i64; N]> =
+                (0..=N).map(|_| std::array::from_fn(|_| r.random_range(-3..=3))).collect();
+            if trial % 10 == 0 {
+                // Make a third of these affinely dependent: x_N = x_1 + x_2 − x_0 (or x_1 = x_0).
+                if N >= 2 {
+                    ip[N] = std::array::from_fn(|i| ip[1][i] + ip[N - 1][i] - ip[0][i]);
+                }
+            }
+            let exact = det_bareiss(
+                &(0..N)
+                    .map(|row| (0..N).map(|c| (ip[c + 1][row] - ip[0][row]) as i128).collect())
+                    .collect::<Vec<Vec<i128>>>(),
+            );
+            let pts: Vec<Vector<N>> =
+                ip.iter().map(|p| std::array::from_fn(|i| p[i] as f64)).collect();
+            let w = signed_volume(&pts) * factorial(N);
+            assert_eq!(w.round() as i128, exact, "N={N}: f64 {w} vs exact {exact}");
+            // Hadamard's bound on |det| sets the scale of f64 rounding.
+            let hadamard: f64 = (1..=N).map(|c| norm(&sub(&pts[c], &pts[0]))).product();
+            assert!((w - exact as f64).abs() <= 1e-12 * hadamard.max(1.0), "N={N}: {w} vs {exact}");
+            if exact == 0 {
+                assert!(w.abs() <= 1e-12 * hadamard.max(1.0));
+            } else {
+                assert_eq!(w.signum(), (exact as f64).signum(), "N={N}: sign");
+            }
+        }
+    }
+
+    #[test]
+    fn f64_volumes_equal_exact_integer_determinants() {
+        for_each_dim!(exact_integer_volumes);
+    }
+
+    fn barycentric_identities<const N: usize>() {
+        let mut r = rng(400 + N as u64);
+        for _ in 0..100 {
+            for k in 1..=N {
+                let pts: Vec<Vector<N>> = random_points(&mut r, k + 1, 2.0);
+                // A point in the affine hull, built from random weights summing to 1.
+                let mut w: Vec<f64> = (0..=k).map(|_| r.random_range(-0.5..1.5)).collect();
+                let s: f64 = w.iter().sum();
+                w.iter_mut().for_each(|x| *x /= s);
+                let mut x = [0.0; N];
+                for (p, wi) in pts.iter().zip(&w) {
+                    x = add_scaled(&x, *wi, p);
+                }
+                let mut t = [0.0; 9];
+                barycentric(&x, &pts, &mut t).unwrap();
+                let sum: f64 = t[..=k].iter().sum();
+                assert!(close(sum, 1.0, 1.0), "N={N} K={k}: sum {sum}");
+                let mut rebuilt = [0.0; N];
+                for (p, ti) in pts.iter().zip(&t) {
+                    rebuilt = add_scaled(&rebuilt, *ti, p);
+                }
+                for i in 0..N {
+                    assert!((rebuilt[i] - x[i]).abs() < 1e-7, "N={N} K={k}: rebuild");
+                }
+                for i in 0..=k {
+                    assert!((t[i] - w[i]).abs() < 1e-7, "N={N} K={k}: weights");
+                }
+                // Off the hull (K < N), the coordinates are those of the projection: moving x
+                // along a direction orthogonal to the hull leaves them unchanged.
+                if k < N {
+                    let e = edge_vectors(&pts);
+                    let mut off = random_vector::<N>(&mut r, 1.0);
+                    // Gram–Schmidt off against the edges.
+                    let mut basis: Vec<Vector<N>> = vec![];
+                    for edge in &e {
+                        let mut b = *edge;
+                        for q in &basis {
+                            b = add_scaled(&b, -dot(&b, q), q);
+                        }
+                        basis.push(scale(&b, 1.0 / norm(&b)));
+                    }
+                    for q in &basis {
+                        off = add_scaled(&off, -dot(&off, q), q);
+                    }
+                    let mut t2 = [0.0; 9];
+                    barycentric(&add(&x, &off), &pts, &mut t2).unwrap();
+                    for i in 0..=k {
+                        assert!((t2[i] - t[i]).abs() < 1e-7, "N={N} K={k}: projection");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn barycentric_coordinates_rebuild_points_in_every_dimension() {
+        for_each_dim!(barycentric_identities);
+    }
+
+    /// The inside test (all t_i ≥ 0) agrees with sampling: points drawn as convex combinations are
+    /// inside, and points of the hyperplane outside the simplex have a negative coordinate whose
+    /// vertex-opposite facet separates them (checked with `side` in the (N−1)-D hull).
+    fn inside_test_agrees_with_sampling<const N: usize>() {
+        let mut r = rng(500 + N as u64);
+        let pts: Vec<Vector<N>> = random_points(&mut r, N + 1, 2.0);
+        let vol = signed_volume(&pts);
+        let mut inside_hits = 0;
+        for _ in 0..2000 {
+            let x = random_vector::<N>(&mut r, 2.5);
+            let mut t = [0.0; 9];
+            barycentric(&x, &pts, &mut t).unwrap();
+            let inside = t[..=N].iter().all(|&ti| ti >= 0.0);
+            // Independent test: x is inside iff replacing any vertex by x keeps the sign of the
+            // volume (each t_i is the volume ratio V(x replacing x_i)/V).
+            let by_volumes = (0..=N).all(|i| {
+                let mut q = pts.clone();
+                q[i] = x;
+                signed_volume(&q) * vol >= 0.0
+            });
+            assert_eq!(inside, by_volumes, "N={N}: inside test vs volume ratios");
+            for i in 0..=N {
+                let mut q = pts.clone();
+                q[i] = x;
+                assert!(close(t[i], signed_volume(&q) / vol, 1.0), "N={N}: t_i as volume ratio");
+            }
+            inside_hits += inside as usize;
+        }
+        // And random convex combinations are always inside.
+        for _ in 0..500 {
+            let mut w: Vec<f64> = (0..=N).map(|_| r.random_range(0.0..1.0)).collect();
+            let s: f64 = w.iter().sum();
+            w.iter_mut().for_each(|x| *x /= s);
+            let mut x = [0.0; N];
+            for (p, wi) in pts.iter().zip(&w) {
+                x = add_scaled(&x, *wi, p);
+            }
+            let mut t = [0.0; 9];
+            barycentric(&x, &pts, &mut t).unwrap();
+            assert!(t[..=N].iter().all(|&ti| ti >= -1e-12), "N={N}: sampled point outside");
+        }
+        let _ = inside_hits;
+    }
+
+    #[test]
+    fn inside_test_in_every_dimension() {
+        for_each_dim!(inside_test_agrees_with_sampling);
+    }
+
+    fn distance_identities<const N: usize>() {
+        let mut r = rng(600 + N as u64);
+        for _ in 0..200 {
+            let pts: Vec<Vector<N>> = random_points(&mut r, N, 2.0);
+            let x = random_vector::<N>(&mut r, 3.0);
+            let (h, p) = point_hyperplane_distance(&x, &pts).unwrap();
+            let plane = hyperplane(&pts).unwrap();
+            // The foot point lies on the hyperplane, and x − p is along the normal.
+            assert!(close(plane.distance(&p), 0.0, 1.0), "N={N}: foot");
+            assert!(close(norm(&sub(&x, &p)), h.abs(), 1.0));
+            // h = N·V_N/V_{N−1} (eq. 11).
+            let mut full = pts.clone();
+            full.push(x);
+            let h11 = N as f64 * signed_volume(&full) / gram_volume(&pts);
+            assert!(close(h, h11, h.abs()), "N={N}: eq. 11 {h} vs {h11}");
+            // side agrees with the sign of h.
+            assert_eq!(side(&x, &pts), if h > 0.0 { 1 } else { -1 });
+            assert_eq!(side(&p, &pts), 0, "N={N}: foot point is on the plane");
+            // Invariant under rotation and translation.
+            let q = random_rotation::<N>(&mut r);
+            let t = random_vector::<N>(&mut r, 5.0);
+            let mv = |y: &Vector<N>| add(&mat_vec(&q, y), &t);
+            let moved: Vec<Vector<N>> = pts.iter().map(mv).collect();
+            let (h2, p2) = point_hyperplane_distance(&mv(&x), &moved).unwrap();
+            assert!(close(h2, h, h.abs()), "N={N}: rotated distance");
+            let pm = mv(&p);
+            for i in 0..N {
+                assert!((p2[i] - pm[i]).abs() < 1e-8, "N={N}: rotated foot point");
+            }
+        }
+    }
+
+    #[test]
+    fn point_hyperplane_distance_in_every_dimension() {
+        for_each_dim!(distance_identities);
+    }
+
+    fn clipping_and_rays<const N: usize>() {
+        let mut r = rng(700 + N as u64);
+        for _ in 0..200 {
+            let pts: Vec<Vector<N>> = random_points(&mut r, N, 2.0);
+            let plane = hyperplane(&pts).unwrap();
+            let a = random_vector::<N>(&mut r, 3.0);
+            let b = random_vector::<N>(&mut r, 3.0);
+            let t = clip_segment(&a, &b, &pts).unwrap();
+            let x = add_scaled(&a, t, &sub(&b, &a));
+            assert!(close(plane.distance(&x), 0.0, 1.0 + t.abs()), "N={N}: clip point on plane");
+            // The segment crosses iff its ends are on opposite sides.
+            let crosses = side(&a, &pts) * side(&b, &pts) < 0;
+            assert_eq!(crosses, (0.0..=1.0).contains(&t), "N={N}: t={t}");
+            // The ray form gives the same point.
+            let d = sub(&b, &a);
+            let tr = ray_hyperplane(&a, &d, &pts).unwrap();
+            assert!(close(tr, t, t.abs()), "N={N}: ray {tr} vs clip {t}");
+            // A direction inside the hyperplane is parallel.
+            let along = sub(&pts[1], &pts[0]);
+            assert_eq!(ray_hyperplane(&a, &along, &pts), Err(Degenerate::Parallel));
+            assert_eq!(clip_segment(&a, &add(&a, &along), &pts), Err(Degenerate::Parallel));
+            assert_eq!(clip_segment(&a, &a, &pts), Err(Degenerate::Parallel));
+        }
+    }
+
+    #[test]
+    fn clipping_and_ray_hyperplane_in_every_dimension() {
+        for_each_dim!(clipping_and_rays);
+    }
+
+    fn normals_are_pseudotensors<const N: usize>() {
+        let mut r = rng(800 + N as u64);
+        for case in 0..150 {
+            let m: Matrix<N> = match case % 3 {
+                0 => random_rotation(&mut r),
+                1 => random_reflection(&mut r),
+                _ => random_matrix(&mut r),
+            };
+            let e: Vec<Vector<N>> = random_points(&mut r, N - 1, 2.0);
+            let n = generalized_cross(&e);
+            let te: Vec<Vector<N>> = e.iter().map(|x| mat_vec(&m, x)).collect();
+            let want = generalized_cross(&te);
+            let got = transform_normal(&m, &n);
+            for i in 0..N {
+                assert!(close(got[i], want[i], norm(&want)), "N={N} case {case}: {got:?} {want:?}");
+            }
+            if case % 3 < 2 {
+                // Orthogonal: cof(R) = det(R)·R.
+                let rn = scale(&mat_vec(&m, &n), det(&m));
+                for i in 0..N {
+                    assert!(close(got[i], rn[i], norm(&n)), "N={N}: det(R)·R·N");
+                }
+                let _ = mat_mul(&m, &transpose(&m));
+            }
+        }
+    }
+
+    #[test]
+    fn transform_normal_matches_recomputed_cross_products() {
+        for_each_dim!(normals_are_pseudotensors);
+    }
+
+    #[test]
+    fn degenerate_barycentric_is_reported() {
+        let p = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0]];
+        let mut t = [0.0; 3];
+        assert_eq!(barycentric(&[0.5, 0.0, 0.0], &p, &mut t), Err(Degenerate::Simplex));
+        let q = [[0.0, 0.0], [0.0, 0.0]];
+        assert_eq!(hyperplane(&q), Err(Degenerate::Simplex));
+        assert_eq!(gram_volume(&q), 0.0);
+    }
+}
