@@ -19,7 +19,7 @@ A simplex is degenerate when its K-volume is negligible against its edge lengths
 ``transform_normal`` are always defined (zero normal or volume); ``side`` returns 0 for a
 degenerate hyperplane. ``hyperplane``, ``point_hyperplane_distance``, ``barycentric``,
 ``clip_segment`` and ``ray_hyperplane`` take ``degenerate="raise"`` (the default: ValueError
-naming the first degenerate batch index) or ``degenerate="nan"`` (NaN in that item's results,
+naming the first degenerate batch index, counted in C order over the flattened batch axes) or ``degenerate="nan"`` (NaN in that item's results,
 and the flag is ``numpy.isnan`` of them).
 """
 
@@ -52,9 +52,15 @@ Degeneracy = Literal["raise", "nan"]
 def _array(name: str, value, min_ndim: int, shape_text: str) -> np.ndarray:
     """``value`` as a float64 array with at least ``min_ndim`` axes and finite entries."""
     try:
-        a = np.asarray(value, dtype=np.float64)
+        raw = np.asarray(value)
     except (TypeError, ValueError) as e:
         raise ValueError(f"{name}: expected a float array of shape {shape_text}: {e}") from None
+    if raw.dtype.kind not in "biuf":
+        raise ValueError(
+            f"{name}: expected real numbers (a float array of shape {shape_text}),"
+            f" got dtype {raw.dtype}"
+        )
+    a = raw.astype(np.float64, copy=False)
     if a.ndim < min_ndim:
         raise ValueError(f"{name}: expected shape {shape_text}, got {a.shape}")
     if not np.all(np.isfinite(a)):

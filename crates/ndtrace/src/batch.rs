@@ -58,6 +58,8 @@ where
         .min_by_key(|&(i, _)| i);
     match (first, on) {
         (Some((index, d)), OnDegenerate::Error) => {
+            // A degenerate simplex is the fault of `points`; a parallel direction of `arg`.
+            let arg = if d == Degenerate::Simplex { "points" } else { arg };
             Err(NdError::Degenerate { arg: arg.into(), index, reason: d.reason() })
         }
         _ => Ok(()),

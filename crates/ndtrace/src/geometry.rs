@@ -55,12 +55,6 @@ fn edges<const N: usize>(points: &[Vector<N>], out: &mut [Vector<N>]) {
     }
 }
 
-/// Product of the edge lengths, the scale against which volumes are judged degenerate.
-#[inline]
-fn edge_length_product<const N: usize>(edges: &[Vector<N>]) -> f64 {
-    edges.iter().map(norm).product()
-}
-
 /// Generalized cross product of N−1 edge vectors (eq. 6): the cofactors of the last column of
 /// `[x_1−x_0 … x_{N−1}−x_0 | x̂_1 … x̂_N]`, i.e. `N_i = (−1)^(i+N) det(E without row i)` with the
 /// edges as columns of E.
@@ -153,15 +147,35 @@ impl<const N: usize> Hyperplane<N> {
 /// of [`generalized_cross`] of the edges, its offset `c = n̂ · x_0`.
 pub fn hyperplane<const N: usize>(points: &[Vector<N>]) -> Result<Hyperplane<N>, Degenerate> {
     assert_eq!(points.len(), N, "a hyperplane needs N points");
-    let mut e = [[0.0; N]; N];
-    edges(points, &mut e[..N - 1]);
-    let n = generalized_cross(&e[..N - 1]);
-    let len = norm(&n);
-    if !(len > DEGENERACY_TOLERANCE * edge_length_product(&e[..N - 1])) {
-        return Err(Degenerate::Simplex);
-    }
-    let normal = scale(&n, 1.0 / len);
+    let normal = unit_cross(points).ok_or(Degenerate::Simplex)?;
     Ok(Hyperplane { normal, offset: dot(&normal, &points[0]) })
+}
+
+/// Unit edges `(x_k − x_0)/|x_k − x_0|` of a simplex, or `None` if an edge has zero (or
+/// non-finite) length. Working with unit edges keeps the degeneracy measure
+/// `W_K / Π|e_k|` free of overflow and underflow at any coordinate scale.
+fn unit_edges<const N: usize>(points: &[Vector<N>], out: &mut [Vector<N>]) -> Option<()> {
+    edges(points, out);
+    for e in out.iter_mut() {
+        // Scale by the largest component first so that |e| neither overflows nor underflows.
+        let m = e.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        if !(m > 0.0 && m.is_finite()) {
+            return None;
+        }
+        let s = scale(e, 1.0 / m);
+        *e = scale(&s, 1.0 / norm(&s));
+    }
+    Some(())
+}
+
+/// The unit normal of the (N−1)-simplex `points` (the direction of eq. 6), or `None` when it
+/// is degenerate: `|cross(unit edges)| = W_{N−1}/Π|e_k| ≤ DEGENERACY_TOLERANCE`.
+fn unit_cross<const N: usize>(points: &[Vector<N>]) -> Option<Vector<N>> {
+    let mut u = [[0.0; N]; N];
+    unit_edges(points, &mut u[..N - 1])?;
+    let n = generalized_cross(&u[..N - 1]);
+    let len = norm(&n);
+    (len > DEGENERACY_TOLERANCE).then(|| scale(&n, 1.0 / len))
 }
 
 /// Signed distance from `x` to the hyperplane of `x_0 … x_{N−1}` and the foot point (eq. 11):
@@ -193,25 +207,28 @@ pub fn barycentric<const N: usize>(
         out[0] = 1.0;
         return Ok(());
     }
+    // Solve with unit edges u_a = e_a/|e_a| (scale-free degeneracy test and conditioning):
+    // x − x_0 = Σ t_a e_a = Σ (t_a |e_a|) u_a.
     let mut e = [[0.0; N]; N];
     edges(points, &mut e[..k]);
-    let g = gram(&e[..k]);
-    // Degenerate when det G = W_K² is negligible against Π|e_k|².
-    let w2 = det_block(&g, k);
-    let scale2 = edge_length_product(&e[..k]).powi(2);
-    if !(w2 > DEGENERACY_TOLERANCE * DEGENERACY_TOLERANCE * scale2) {
+    let mut u = [[0.0; N]; N];
+    unit_edges(points, &mut u[..k]).ok_or(Degenerate::Simplex)?;
+    let g = gram(&u[..k]);
+    // Degenerate when det G(u) = (W_K / Π|e_k|)² is negligible.
+    if !(det_block(&g, k) > DEGENERACY_TOLERANCE * DEGENERACY_TOLERANCE) {
         return Err(Degenerate::Simplex);
     }
     let d = sub(x, &points[0]);
     let mut rhs = [0.0; N];
     for a in 0..k {
-        rhs[a] = dot(&e[a], &d);
+        rhs[a] = dot(&u[a], &d);
     }
-    let t = solve_block(g, rhs, k).ok_or(Degenerate::Simplex)?;
+    let s = solve_block(g, rhs, k).ok_or(Degenerate::Simplex)?;
     let mut t0 = 1.0;
     for a in 0..k {
-        out[a + 1] = t[a];
-        t0 -= t[a];
+        let t = s[a] / norm(&e[a]);
+        out[a + 1] = t;
+        t0 -= t;
     }
     out[0] = t0;
     Ok(())
@@ -223,14 +240,16 @@ pub fn barycentric<const N: usize>(
 /// x_0), and 0 when the hyperplane is degenerate.
 pub fn side<const N: usize>(x: &Vector<N>, points: &[Vector<N>]) -> i8 {
     assert_eq!(points.len(), N, "a hyperplane needs N points");
-    let mut e = [[0.0; N]; N];
-    edges(points, &mut e[..N - 1]);
-    let n = generalized_cross(&e[..N - 1]);
+    let Some(n) = unit_cross(points) else { return 0 };
+    // sign V_N = sign(N · (x − x_0)); compared with |x − x_0| to be scale-free.
     let d = sub(x, &points[0]);
-    // N!·V_N = det[e_1 … e_{N−1} | x − x_0] = N · (x − x_0).
-    let w = dot(&n, &d);
-    let scale = edge_length_product(&e[..N - 1]) * norm(&d);
-    if w.abs() <= DEGENERACY_TOLERANCE * scale {
+    let m = d.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if !(m > 0.0) {
+        return 0;
+    }
+    let w = dot(&n, &scale(&d, 1.0 / m));
+    let dn = norm(&scale(&d, 1.0 / m));
+    if w.abs() <= DEGENERACY_TOLERANCE * dn {
         0
     } else if w > 0.0 {
         1
