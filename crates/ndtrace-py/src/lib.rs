@@ -5,8 +5,11 @@
 
 use pyo3::prelude::*;
 
+mod composite;
 mod errors;
+mod files;
 mod geometry;
+mod scene;
 
 /// The compiled part of ndtrace. Use the `ndtrace` package, not this module.
 #[pymodule]
@@ -15,5 +18,8 @@ fn _ndtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MIN_DIM", ndtrace::MIN_DIM)?;
     m.add("MAX_DIM", ndtrace::MAX_DIM)?;
     geometry::register(m)?;
+    scene::register(m)?;
+    composite::register(m)?;
+    files::register(m)?;
     Ok(())
 }

@@ -24,6 +24,18 @@ pub enum NdError {
     #[error("{arg}: {reason} at batch index {index}")]
     Degenerate { arg: String, index: usize, reason: &'static str },
 
+    /// A problem in a scene, located in its source (`file:line:col` or `<dict>`).
+    #[error("{location}: {}{message}", if path.is_empty() { String::new() } else { format!("{path}: ") })]
+    Scene { location: String, path: String, message: String },
+
+    /// A file that cannot be read or written.
+    #[error("{path}: {message}")]
+    File { path: String, message: String },
+
+    /// The user interrupted the work.
+    #[error("interrupted")]
+    Cancelled,
+
     /// A value outside its allowed range.
     #[error("{arg}: {message}")]
     Value { arg: String, message: String },

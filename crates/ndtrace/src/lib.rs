@@ -20,12 +20,20 @@
 // `!(x > tol)` is deliberate: it also rejects NaN. Index loops mirror the matrix formulas.
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 
+pub mod accel;
 pub mod batch;
+pub mod camera;
+pub mod composite;
 pub mod dim;
 pub mod error;
 pub mod exact;
+pub mod files;
 pub mod geometry;
 pub mod linalg;
+pub mod mesh;
+pub mod render;
+pub mod scene;
+pub mod shapes;
 
 #[cfg(test)]
 pub(crate) mod testutil;

@@ -1,0 +1,196 @@
+//! Scenes and tracing: `_ndtrace.load_file`, `_ndtrace.load_dict`, and the `CompiledScene`
+//! class (a validated description plus its built, traceable scene and BVH).
+
+use crate::errors::to_py_err;
+use ndtrace::render::{self, Progress, Retina};
+use ndtrace::scene::{self, AnyScene, SceneDesc};
+use ndtrace::{with_scene, NdError};
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+/// A validated scene with its BVH, built once and reused by every trace.
+#[pyclass(module = "ndtrace._ndtrace", frozen)]
+pub struct CompiledScene {
+    desc: SceneDesc,
+    scene: AnyScene,
+}
+
+#[pymethods]
+impl CompiledScene {
+    /// Dimension N.
+    #[getter]
+    fn dim(&self) -> usize {
+        self.scene.dim()
+    }
+
+    /// Warnings from building (e.g. skipped degenerate simplices).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.scene.warnings().to_vec()
+    }
+
+    /// Retina shape in numpy order.
+    #[getter]
+    fn retina_shape(&self) -> Vec<usize> {
+        with_scene!(&self.scene, s, _N => s.camera.numpy_shape())
+    }
+
+    /// Camera orientation (rows) as built; for `look_at` cameras the matrix the course's
+    /// convention produces.
+    #[getter]
+    fn camera_orientation(&self) -> Vec<Vec<f64>> {
+        with_scene!(&self.scene, s, _N => s.camera.orientation.iter().map(|r| r.to_vec()).collect())
+    }
+
+    /// Number of simplices in the BVH and its memory in bytes.
+    fn bvh_stats(&self) -> (usize, usize, usize) {
+        with_scene!(&self.scene, s, _N => (s.bvh.len(), s.bvh.node_count(), s.bvh.memory_bytes()))
+    }
+
+    /// The camera section of the description as TOML (stored in retina files).
+    fn camera_toml(&self) -> PyResult<String> {
+        scene::to_toml(&self.desc).map(|t| {
+            let start = t.find("[camera]").unwrap_or(0);
+            let rest = &t[start..];
+            let end = rest[1..].find("\n[").map_or(rest.len(), |e| e + 2);
+            rest[..end].trim_end().to_string()
+        }).map_err(to_py_err)
+    }
+
+    /// The description as TOML.
+    fn to_toml(&self) -> PyResult<String> {
+        scene::to_toml(&self.desc).map_err(to_py_err)
+    }
+
+    /// The description as plain Python data (dicts, lists, numbers, strings).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        pythonize::pythonize(py, &self.desc).map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
+    /// Whether two scenes have equal descriptions.
+    fn same_description(&self, other: &CompiledScene) -> bool {
+        self.desc == other.desc
+    }
+
+    /// Traces the retina. `threads=None` uses every core. `callback(done, total)` is called
+    /// about ten times a second; Ctrl-C (or an exception in the callback) cancels within a
+    /// fraction of a second. Returns a dict of numpy arrays.
+    #[pyo3(signature = (threads=None, callback=None))]
+    fn trace<'py>(&self, py: Python<'py>, threads: Option<usize>, callback: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
+        if threads == Some(0) {
+            return Err(PyValueError::new_err("threads: must be at least 1 (or None for every core)"));
+        }
+        let pool = match threads {
+            Some(k) => Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(k)
+                    .build()
+                    .map_err(|e| PyValueError::new_err(format!("threads: cannot start {k} threads: {e}")))?,
+            ),
+            None => None,
+        };
+        let total = with_scene!(&self.scene, s, _N => s.camera.cell_count());
+        let progress = Progress::default();
+        let scene = &self.scene;
+        let run = || with_scene!(scene, s, _N => render::trace(s, &progress));
+        let mut interrupt: Option<PyErr> = None;
+        let result = std::thread::scope(|sc| {
+            let (done_tx, done_rx) = std::sync::mpsc::channel::<()>();
+            let handle = sc.spawn(move || {
+                let r = match &pool {
+                    Some(p) => p.install(run),
+                    None => run(),
+                };
+                let _ = done_tx.send(());
+                r
+            });
+            // Wake at once when the trace ends, else every 50 ms for Ctrl-C and progress.
+            let done_rx = std::sync::Mutex::new(done_rx);
+            let wait = || done_rx.lock().map_or(Ok(()), |rx| rx.recv_timeout(Duration::from_millis(50)));
+            while py.detach(wait)
+                == Err(std::sync::mpsc::RecvTimeoutError::Timeout)
+            {
+                if interrupt.is_none() {
+                    let polled = py.check_signals().and_then(|_| match &callback {
+                        Some(cb) => cb.call1((progress.done.load(Ordering::Relaxed), total)).map(|_| ()),
+                        None => Ok(()),
+                    });
+                    if let Err(e) = polled {
+                        progress.cancel.store(true, Ordering::Relaxed);
+                        interrupt = Some(e);
+                    }
+                }
+            }
+            handle.join().unwrap_or(Err(NdError::Cancelled))
+        });
+        if let Some(e) = interrupt {
+            return Err(e);
+        }
+        let retina = result.map_err(to_py_err)?;
+        if let Some(cb) = &callback {
+            cb.call1((total, total))?;
+        }
+        retina_dict(py, retina)
+    }
+}
+
+fn retina_dict(py: Python<'_>, r: Retina) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    let shape = r.shape.clone();
+    let with = |extra: usize| -> Vec<usize> {
+        let mut s = shape.clone();
+        if extra > 0 {
+            s.push(extra);
+        }
+        s
+    };
+    d.set_item("dim", r.dim)?;
+    d.set_item("rgba", PyArray1::from_vec(py, r.rgba).reshape(with(4))?)?;
+    d.set_item("depth", PyArray1::from_vec(py, r.depth).reshape(with(0))?)?;
+    d.set_item("normal", PyArray1::from_vec(py, r.normal).reshape(with(r.dim))?)?;
+    d.set_item("object_id", PyArray1::from_vec(py, r.object_id).reshape(with(0))?)?;
+    d.set_item("primitive_id", PyArray1::from_vec(py, r.primitive_id).reshape(with(0))?)?;
+    Ok(d)
+}
+
+/// Loads and builds a TOML scene file.
+#[pyfunction]
+fn load_file(py: Python<'_>, path: PathBuf) -> PyResult<CompiledScene> {
+    let (desc, scene) = py.detach(|| scene::load_file(&path)).map_err(to_py_err)?;
+    Ok(CompiledScene { desc, scene })
+}
+
+/// Parses TOML text (named `name` in errors) and builds it; relative files resolve against `base`.
+#[pyfunction]
+#[pyo3(signature = (text, name="<string>", base=None))]
+fn load_toml(py: Python<'_>, text: &str, name: &str, base: Option<PathBuf>) -> PyResult<CompiledScene> {
+    let (desc, scene) = py.detach(|| scene::load_toml_str(text, name, base.as_deref())).map_err(to_py_err)?;
+    Ok(CompiledScene { desc, scene })
+}
+
+/// Builds a scene from plain Python data (dicts, lists, numbers, strings); errors are named
+/// `name`; relative files resolve against `base`.
+#[pyfunction]
+#[pyo3(signature = (data, name="<dict>", base=None))]
+fn load_dict(py: Python<'_>, data: &Bound<'_, PyAny>, name: &str, base: Option<PathBuf>) -> PyResult<CompiledScene> {
+    let mut de = pythonize::Depythonizer::from_object(data);
+    let desc = scene::deserialize(&mut de).map_err(|e| {
+        to_py_err(NdError::Scene { location: name.to_string(), path: e.path, message: e.message })
+    })?;
+    let scene = py.detach(|| scene::build_desc(&desc, name, base.as_deref())).map_err(to_py_err)?;
+    Ok(CompiledScene { desc, scene })
+}
+
+/// Adds the scene functions and class.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<CompiledScene>()?;
+    m.add_function(wrap_pyfunction!(load_file, m)?)?;
+    m.add_function(wrap_pyfunction!(load_toml, m)?)?;
+    m.add_function(wrap_pyfunction!(load_dict, m)?)?;
+    Ok(())
+}

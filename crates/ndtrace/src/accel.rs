@@ -1,0 +1,1902 @@
+//! Ray–simplex intersection and a bounding-volume hierarchy over (N−1)-simplices in R^N.
+//!
+//! ## Ray–simplex test (sections "Ray Tracing" and "Barycentric Coordinates")
+//! A [`PreparedSimplex`] stores the unit normal n̂ of its hyperplane (the direction of the
+//! generalized cross product of `x_1 − x_0 … x_{N−1} − x_0`, eq. 6), the N−1 rows `r_k` of the
+//! pseudo-inverse `(EᵀE)⁻¹Eᵀ` of the edge matrix E (the Gram/Cramer form of the barycentric
+//! coordinates) and the first vertex `x_0`. A ray `X(t) = C + t·d` then meets the simplex
+//! without any per-ray solve, in O(N²):
+//!
+//! * `t = n̂·(x_0 − C) / n̂·d`;
+//! * `t_k = r_k·(X(t) − x_0) = r_k·(C − x_0) + t·(r_k·d)` for k = 1 … N−1, `t_0 = 1 − Σ t_k`
+//!   (evaluated as `r_k·q` with `q = t·d − (x_0 − C)`, one dot product per row);
+//! * it is a hit when t lies in the open interval `(tmin, tmax)` and every `t_k ≥ −BARY_SLACK`.
+//!
+//! A ray is parallel to the hyperplane (and misses) when `|n̂·d| ≤ DEGENERACY_TOLERANCE·|d|`, the
+//! rule of [`crate::geometry::ray_hyperplane`]. Hits are two-sided: orientation is left to shading.
+//!
+//! ## BVH
+//! [`Bvh`] is built as a binary tree of N-D axis-aligned boxes with binned SAH (16 bins per axis
+//! over the centroid bounds, leaves of at most 4 simplices, object-median split when SAH cannot
+//! split or the tree gets deep), then collapsed into a 4-wide tree:
+//!
+//! * nodes (`Vec`, depth-first order) hold the boxes of their up to 4 children as
+//!   structure-of-arrays `f32` (rounded outward, so conservative), tested together lane-wise;
+//! * every leaf is one *block*: its up to 4 prepared simplices stored structure-of-arrays
+//!   (`[f64; 4]` per coefficient, one lane per simplex) with their ids, in leaf order, so one
+//!   block test intersects the whole leaf with straight-line code the compiler vectorizes.
+//!
+//! Traversal is nearest-first (hit children are visited in order of entry distance, nodes whose
+//! entry lies beyond the current best are skipped) with an explicit fixed-size stack and no heap
+//! allocation; [`Bvh::any_hit`] stops at the first accepted hit. The build is parallel (rayon)
+//! for large inputs and produces the same tree for any number of threads.
+
+use crate::geometry::{hyperplane, DEGENERACY_TOLERANCE};
+use crate::linalg::{dot, solve_block, sub, Matrix, Vector};
+use crate::mesh::Mesh;
+use rayon::prelude::*;
+use std::mem::MaybeUninit;
+
+/// Slack of the barycentric inside test: a hit needs `t_k ≥ −BARY_SLACK` for every k.
+///
+/// Barycentric coordinates are ratios of volumes, hence dimensionless and invariant under
+/// translation, rotation and scaling, so an *absolute* slack on them is already scale-free: it
+/// widens every simplex by `BARY_SLACK` times its own height over each facet, whatever the units
+/// of the scene. It must exceed the rounding error of the computed `t_k`, which is about
+/// `c·N·ε·D/h` for a ray travelling a distance D to a simplex of size h (ε = 2.2e-16): the hit
+/// point carries an absolute error ~ε·D and `|r_k| ~ 1/h`. With 1e-9 that leaves room for
+/// `D/h` up to ~10⁵ (a 10⁻⁵-sized facet seen from 1 unit away), far beyond any tessellation
+/// we render, so rays aimed exactly at shared vertices, edges and ridges of a closed mesh hit
+/// at least one of the simplices sharing them. The price is an overlap band of relative width
+/// 1e-9 at shared boundaries, invisible and harmless (the nearer or equal-t, smaller-id simplex
+/// wins). Exact ties are settled deterministically by [`Bvh::closest_hit`].
+pub const BARY_SLACK: f64 = 1e-9;
+
+/// Leaves hold at most this many simplices: the lanes of a block.
+pub const MAX_LEAF: usize = W;
+/// Lanes of a block (simplices tested together).
+const W: usize = 4;
+/// Children of a node (boxes tested together).
+const NW: usize = 4;
+/// Bins per axis of the SAH build.
+const BINS: usize = 16;
+/// Below this depth SAH decides the binary splits; deeper, object-median splits bound the depth
+/// (they halve a u32-indexed range, so the binary tree has at most `MAX_SAH_DEPTH + 33` levels).
+const MAX_SAH_DEPTH: usize = 48;
+/// Traversal stack size: a node pushes at most NW − 1 entries, and the wide tree is no deeper
+/// than the binary one.
+const STACK_SIZE: usize = (NW - 1) * (MAX_SAH_DEPTH + 34) + 2;
+/// Nodes with at least this many simplices are built in parallel (the result does not depend on
+/// it: see [`Bvh::build`]).
+const PAR_MIN: usize = 16 * 1024;
+/// Chunk size of the parallel binning passes.
+const PAR_CHUNK: usize = 8 * 1024;
+/// Relative widening of the parameter range used for box culling: covers the rounding of a
+/// simplex's computed t (~N·ε·|x_0 − C| over the distance of C to its hyperplane), so that box
+/// culling never rejects a node holding a simplex whose computed t is within range.
+const T_PAD: f64 = 1e-9;
+/// Relative shift of the ray origin that makes the `f32` slab test conservative (see
+/// [`RayPre::new`]); 2⁻²⁰ covers the test's three roundings of ≤ 2⁻²⁴ each with a wide margin.
+const SLAB_REL: f64 = 1.0 / (1u32 << 20) as f64;
+/// Relative padding of each simplex's box, covering the `BARY_SLACK` band around it (a point
+/// with `t_k ≥ −BARY_SLACK` is at most `BARY_SLACK·diameter` outside the simplex, and
+/// `diameter ≤ √N·max extent ≤ 3·max extent`).
+const BOX_PAD: f64 = 1e-8;
+/// Child slot tag of a leaf (block index in the low bits).
+const LEAF: u32 = 1 << 31;
+/// An unused child slot (its box is empty, so it is never entered).
+const EMPTY: u32 = u32::MAX;
+
+/// A ray `X(t) = origin + t·dir`; `dir` need not be unit, so t is in units of `|dir|`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ray<const N: usize> {
+    /// The camera focal point C (or any ray start).
+    pub origin: Vector<N>,
+    /// `P − C`, the direction (not necessarily normalized).
+    pub dir: Vector<N>,
+}
+
+impl<const N: usize> Ray<N> {
+    /// The point `origin + t·dir`.
+    #[inline]
+    pub fn at(&self, t: f64) -> Vector<N> {
+        std::array::from_fn(|i| self.origin[i] + t * self.dir[i])
+    }
+}
+
+/// An (N−1)-simplex in R^N with everything the ray test needs precomputed:
+/// `m[0] = n̂`, `m[k] = r_k` (k = 1 … N−1), and `x_0`. `N·(N+1)` f64s: 96 bytes in 3D,
+/// 160 bytes in 4D, 576 bytes in 8D.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PreparedSimplex<const N: usize> {
+    m: Matrix<N>,
+    x0: Vector<N>,
+}
+
+/// The ray quantities the simplex test needs, computed once per ray.
+#[derive(Clone, Copy)]
+struct RayLocal<const N: usize> {
+    o: Vector<N>,
+    d: Vector<N>,
+    /// `(DEGENERACY_TOLERANCE·|d|)²`: the parallel threshold for `(n̂·d)²`.
+    par2: f64,
+}
+
+impl<const N: usize> RayLocal<N> {
+    #[inline(always)]
+    fn new(ray: &Ray<N>) -> Self {
+        let d2 = dot(&ray.dir, &ray.dir);
+        RayLocal { o: ray.origin, d: ray.dir, par2: DEGENERACY_TOLERANCE * DEGENERACY_TOLERANCE * d2 }
+    }
+}
+
+impl<const N: usize> PreparedSimplex<N> {
+    /// Prepares the simplex `x_0 … x_{N−1}`; `None` when it is degenerate (exactly when
+    /// [`crate::geometry::hyperplane`] returns `Err`) or not finite.
+    pub fn new(points: &[[f64; N]; N]) -> Option<Self> {
+        let plane = hyperplane(points).ok()?;
+        let x0 = points[0];
+        let k = N - 1;
+        let mut e = [[0.0; N]; N];
+        for a in 0..k {
+            e[a] = sub(&points[a + 1], &x0);
+        }
+        // Gram matrix G_ab = e_a·e_b in the leading k × k block.
+        let mut g: Matrix<N> = [[0.0; N]; N];
+        for a in 0..k {
+            for b in a..k {
+                let v = dot(&e[a], &e[b]);
+                g[a][b] = v;
+                g[b][a] = v;
+            }
+        }
+        let mut m: Matrix<N> = [[0.0; N]; N];
+        m[0] = plane.normal;
+        for a in 0..k {
+            // Row a of G⁻¹ (G is symmetric, so it is also column a): G·y = ê_a.
+            let mut unit = [0.0; N];
+            unit[a] = 1.0;
+            let y = solve_block(g, unit, k)?;
+            // r_a = Σ_b (G⁻¹)_ab e_b: row a of (EᵀE)⁻¹Eᵀ, so that r_a·e_b = δ_ab and r_a ⊥ n̂.
+            let mut r = [0.0; N];
+            for b in 0..k {
+                for i in 0..N {
+                    r[i] += y[b] * e[b][i];
+                }
+            }
+            m[a + 1] = r;
+        }
+        let finite = m.iter().flatten().chain(x0.iter()).all(|v| v.is_finite());
+        finite.then_some(PreparedSimplex { m, x0 })
+    }
+
+    /// Hit with t in the open interval (tmin, tmax): `(t, [t_0 … t_{N−1}])`, the barycentric
+    /// coordinates summing to 1 (each ≥ −[`BARY_SLACK`]). `None` for a miss, a ray parallel to
+    /// the hyperplane, or a zero direction.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray<N>, tmin: f64, tmax: f64) -> Option<(f64, [f64; N])> {
+        self.hit(&RayLocal::new(ray), tmin, tmax)
+    }
+
+    /// The ray test, in the arithmetic shared bit for bit with the block test of the BVH:
+    /// pairwise dot products, and the division by `n̂·d` deferred from the inside test
+    /// (`u_k = r_k·w` with `w = (n̂·p)·d − (n̂·d)·p = (n̂·d)·q`, so `t_k = u_k/(n̂·d)`).
+    #[inline(always)]
+    fn hit(&self, ray: &RayLocal<N>, tmin: f64, tmax: f64) -> Option<(f64, [f64; N])> {
+        let n = &self.m[0];
+        let den = dot_pairwise(n, &ray.d);
+        // Parallel (|n̂·d| ≤ tol·|d|), zero or NaN direction: a miss.
+        if !(den * den > ray.par2) {
+            return None;
+        }
+        let p = sub(&self.x0, &ray.o); // x_0 − C
+        let num = dot_pairwise(n, &p);
+        let t = num / den;
+        if !(t > tmin && t < tmax) {
+            return None;
+        }
+        let w: Vector<N> = std::array::from_fn(|i| num * ray.d[i] - den * p[i]);
+        let (abs, thr) = (den.abs(), -BARY_SLACK * den.abs());
+        let mut u = [0.0; N];
+        let mut sum = 0.0;
+        let mut inside = true;
+        for k in 1..N {
+            u[k] = dot_pairwise(&self.m[k], &w);
+            // u_k·sign(n̂·d) = |n̂·d|·t_k.
+            let v = if den < 0.0 { -u[k] } else { u[k] };
+            inside &= v >= thr;
+            sum += v;
+        }
+        inside &= abs - sum >= thr;
+        inside.then(|| (t, bary_from(&u, den)))
+    }
+
+    /// Unit normal: the direction of the generalized cross product of `x_1 − x_0 … x_{N−1} − x_0`
+    /// (eq. 6).
+    #[inline]
+    pub fn normal(&self) -> [f64; N] {
+        self.m[0]
+    }
+
+    /// First vertex x_0.
+    #[inline]
+    pub fn origin(&self) -> [f64; N] {
+        self.x0
+    }
+
+    /// Offset c of the hyperplane `n̂·x = c`.
+    #[inline]
+    pub fn offset(&self) -> f64 {
+        dot(&self.m[0], &self.x0)
+    }
+
+    /// Barycentric coordinates `t_0 … t_{N−1}` of the orthogonal projection of `x` onto the
+    /// simplex's hyperplane.
+    pub fn barycentric(&self, x: &Vector<N>) -> [f64; N] {
+        let q = sub(x, &self.x0);
+        let mut out = [0.0; N];
+        let mut sum = 0.0;
+        for k in 1..N {
+            out[k] = dot(&self.m[k], &q);
+            sum += out[k];
+        }
+        out[0] = 1.0 - sum;
+        out
+    }
+}
+
+/// Pairwise sum: `v[j] += v[j + ⌈m/2⌉]` halving m, the order every dot product of the ray
+/// tests uses (short dependency chains, and the same bits in the scalar and the SIMD code).
+#[inline(always)]
+fn sum_pairwise<const N: usize>(mut v: [f64; N]) -> f64 {
+    let mut m = N;
+    while m > 1 {
+        let half = m.div_ceil(2);
+        for j in 0..m / 2 {
+            v[j] += v[j + half];
+        }
+        m = half;
+    }
+    v[0]
+}
+
+/// `a·b` summed pairwise (see [`sum_pairwise`]).
+#[inline(always)]
+fn dot_pairwise<const N: usize>(a: &Vector<N>, b: &Vector<N>) -> f64 {
+    sum_pairwise::<N>(std::array::from_fn(|i| a[i] * b[i]))
+}
+
+/// Barycentric coordinates from `u_k = (n̂·d)·t_k` (k ≥ 1; `u[0]` unused): `t_k = u_k/(n̂·d)`,
+/// `t_0 = 1 − Σ t_k`.
+#[inline(always)]
+fn bary_from<const N: usize>(u: &[f64; N], den: f64) -> [f64; N] {
+    let mut b = [0.0; N];
+    let mut sum = 0.0;
+    for k in 1..N {
+        b[k] = u[k] / den;
+        sum += b[k];
+    }
+    b[0] = 1.0 - sum;
+    b
+}
+
+/// The (min, max) corners of the bounding box of the points.
+pub fn simplex_bounds<const N: usize>(points: &[[f64; N]]) -> ([f64; N], [f64; N]) {
+    let mut lo = [f64::INFINITY; N];
+    let mut hi = [f64::NEG_INFINITY; N];
+    for p in points {
+        for i in 0..N {
+            lo[i] = lo[i].min(p[i]);
+            hi[i] = hi[i].max(p[i]);
+        }
+    }
+    (lo, hi)
+}
+
+/// A ray hit: parameter t, the caller's id of the simplex, barycentric coordinates `t_0 … t_{N−1}`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit<const N: usize> {
+    /// Ray parameter (units of `|dir|`).
+    pub t: f64,
+    /// The caller's id of the simplex hit.
+    pub prim: u32,
+    /// Barycentric coordinates of the hit point, summing to 1.
+    pub bary: [f64; N],
+}
+
+/// A wide node: the boxes of its up to `NW` children, structure-of-arrays, and the child
+/// references.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+struct Node<const N: usize> {
+    /// `b[0][axis][lane]` = min corner, `b[1][axis][lane]` = max corner (f32 rounded outward;
+    /// +∞/−∞ for an empty slot).
+    b: [[[f32; NW]; N]; 2],
+    /// A node index, `LEAF | block index`, or `EMPTY`.
+    child: [u32; NW],
+}
+
+impl<const N: usize> Node<N> {
+    const EMPTY: Self =
+        Node { b: [[[f32::INFINITY; NW]; N], [[f32::NEG_INFINITY; NW]; N]], child: [EMPTY; NW] };
+}
+
+/// A leaf: up to 4 prepared simplices, structure-of-arrays (lane = simplex).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Block<const N: usize> {
+    /// `m[0][i][lane]` = n̂_i, `m[k][i][lane]` = (r_k)_i; zero in unused lanes (which then miss as
+    /// parallel rays).
+    m: [[[f64; W]; N]; N],
+    /// `x0[i][lane]`.
+    x0: [[f64; W]; N],
+    /// The caller's ids.
+    ids: [u32; W],
+    /// Lanes in use.
+    count: u32,
+}
+
+/// Largest f32 ≤ x.
+#[inline]
+fn f32_down(x: f64) -> f32 {
+    let f = x as f32;
+    if f as f64 > x {
+        f.next_down()
+    } else {
+        f
+    }
+}
+
+/// Smallest f32 ≥ x.
+#[inline]
+fn f32_up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
+/// `t` widened by `T_PAD` relative (upward).
+#[inline(always)]
+fn pad_up(t: f64) -> f64 {
+    t + t.abs() * T_PAD
+}
+
+/// `t` widened by `T_PAD` relative (downward).
+#[inline(always)]
+fn pad_down(t: f64) -> f64 {
+    t - t.abs() * T_PAD
+}
+
+/// Per-ray data of a traversal: the simplex-test data plus the `f32` slab-test data (the slab
+/// data splatted over the lanes of a node).
+struct RayPre<const N: usize> {
+    local: RayLocal<N>,
+    /// 1 when the ray enters slab i through its max side (`d_i` negative, including −0), else 0.
+    near: [usize; N],
+    /// `1/d_i` in f32 (±∞ for a ±0 or tiny component).
+    inv: [[f32; NW]; N],
+    /// Origin moved and rounded to f32 towards the side that makes the near parameter smaller…
+    o_near: [[f32; NW]; N],
+    /// …and the far parameter larger.
+    o_far: [[f32; NW]; N],
+}
+
+impl<const N: usize> RayPre<N> {
+    /// `reach` bounds the absolute value of every box coordinate of the tree.
+    #[inline(always)]
+    fn new(ray: &Ray<N>, reach: f64) -> Self {
+        let mut pre = RayPre {
+            local: RayLocal::new(ray),
+            near: [0; N],
+            inv: [[0.0; NW]; N],
+            o_near: [[0.0; NW]; N],
+            o_far: [[0.0; NW]; N],
+        };
+        for i in 0..N {
+            let (o, d) = (ray.origin[i], ray.dir[i]);
+            // The f32 slab parameters `(b − o')·inv` carry four roundings (o' to f32 aside: the
+            // difference, the product, and d and 1/d to f32), each ≤ 2⁻²⁴ relative, i.e. an
+            // absolute error below 2⁻²²·|b − o'|·|1/d| with |b − o'| ≲ reach + |o|. Moving
+            // the origin by 2δ, δ = 2⁻²⁰·(reach + |o|), towards the side that lowers the near
+            // parameter (and, separately, raises the far one) more than covers that, and the
+            // rounding of o ± 2δ to f32 (≤ 2⁻²⁴·|o ± 2δ| < δ) cannot undo it. So the test is
+            // conservative without per-node padding; boxes are widened by ~1e-6 of the scene.
+            let delta2 = 2.0 * (reach + o.abs()) * SLAB_REL;
+            // (b − o')·inv ≤ (b − o)·inv needs o' ≥ o when inv ≥ 0, o' ≤ o when inv < 0.
+            let neg = d.is_sign_negative();
+            let (lo, hi) = ((o - delta2) as f32, (o + delta2) as f32);
+            pre.near[i] = neg as usize;
+            pre.inv[i] = [1.0 / d as f32; NW];
+            pre.o_near[i] = [if neg { lo } else { hi }; NW];
+            pre.o_far[i] = [if neg { hi } else { lo }; NW];
+        }
+        pre
+    }
+
+    /// Slab test of the child boxes of a node against the parameter range [lo, hi]: a bit
+    /// mask of the boxes met, and their entry parameters.
+    ///
+    /// Conservative: the near and far planes of each slab are chosen by the sign of the
+    /// direction and evaluated with the origin moved and rounded to f32 in the safe direction
+    /// (see [`RayPre::new`]). A zero direction component (inv = ±∞) gives −∞/+∞ for an origin
+    /// strictly inside the slab and equal-signed infinities outside it; the one NaN case, `0·∞`
+    /// for an origin exactly on a slab plane, is ignored by the running max/min (which keep the
+    /// other operand), leaving the slab unrestricted: boxes are closed, and a ray running along
+    /// a face is inside.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn slab(&self, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
+        use std::arch::x86_64::*;
+        let mut mask = 0;
+        let mut out = [0.0f32; NW];
+        // SAFETY: SSE is part of the x86_64 baseline; every pointer loaded or stored is a
+        // `[f32; NW]` accessed in quarters of 16 valid bytes (unaligned accesses).
+        unsafe {
+            for q in 0..NW / 4 {
+                let ld = |a: &[f32; NW]| _mm_loadu_ps(a.as_ptr().add(4 * q));
+                let mut near = [_mm_set1_ps(lo); N];
+                let mut far = [_mm_set1_ps(hi); N];
+                for i in 0..N {
+                    let s = self.near[i] & 1;
+                    let inv = ld(&self.inv[i]);
+                    let a = _mm_mul_ps(_mm_sub_ps(ld(&node.b[s][i]), ld(&self.o_near[i])), inv);
+                    let c = _mm_mul_ps(_mm_sub_ps(ld(&node.b[s ^ 1][i]), ld(&self.o_far[i])), inv);
+                    // maxps/minps return their second operand when either is NaN.
+                    near[i] = _mm_max_ps(a, near[i]);
+                    far[i] = _mm_min_ps(c, far[i]);
+                }
+                // Pairwise reduction (short dependency chains; max/min are exact).
+                let mut m = N;
+                while m > 1 {
+                    let half = m.div_ceil(2);
+                    for j in 0..m / 2 {
+                        near[j] = _mm_max_ps(near[j], near[j + half]);
+                        far[j] = _mm_min_ps(far[j], far[j + half]);
+                    }
+                    m = half;
+                }
+                mask |= (_mm_movemask_ps(_mm_cmple_ps(near[0], far[0])) as u32) << (4 * q);
+                _mm_storeu_ps(out.as_mut_ptr().add(4 * q), near[0]);
+            }
+        }
+        (mask, out)
+    }
+
+    /// [`RayPre::slab`] with all 8 lanes in one AVX register (same results).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn slab_avx2(&self, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
+        use std::arch::x86_64::*;
+        let ld = |a: &[f32; NW]| _mm256_loadu_ps(a.as_ptr());
+        let mut near = [_mm256_set1_ps(lo); N];
+        let mut far = [_mm256_set1_ps(hi); N];
+        for i in 0..N {
+            let s = self.near[i] & 1;
+            let inv = ld(&self.inv[i]);
+            let a = _mm256_mul_ps(_mm256_sub_ps(ld(&node.b[s][i]), ld(&self.o_near[i])), inv);
+            let c = _mm256_mul_ps(_mm256_sub_ps(ld(&node.b[s ^ 1][i]), ld(&self.o_far[i])), inv);
+            near[i] = _mm256_max_ps(a, near[i]);
+            far[i] = _mm256_min_ps(c, far[i]);
+        }
+        let mut m = N;
+        while m > 1 {
+            let half = m.div_ceil(2);
+            for j in 0..m / 2 {
+                near[j] = _mm256_max_ps(near[j], near[j + half]);
+                far[j] = _mm256_min_ps(far[j], far[j + half]);
+            }
+            m = half;
+        }
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near[0], far[0])) as u32;
+        let mut out = [0.0f32; NW];
+        _mm256_storeu_ps(out.as_mut_ptr(), near[0]);
+        (mask, out)
+    }
+
+    /// Portable version of the x86_64 slab test above (same arithmetic, same results).
+    #[cfg(not(target_arch = "x86_64"))]
+    #[inline(always)]
+    fn slab(&self, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
+        let mut tn = [lo; NW];
+        let mut tf = [hi; NW];
+        for i in 0..N {
+            let s = self.near[i] & 1;
+            let (bn, bf) = (&node.b[s][i], &node.b[s ^ 1][i]);
+            for l in 0..NW {
+                let a = (bn[l] - self.o_near[i][l]) * self.inv[i][l];
+                let c = (bf[l] - self.o_far[i][l]) * self.inv[i][l];
+                tn[l] = if a > tn[l] { a } else { tn[l] };
+                tf[l] = if c < tf[l] { c } else { tf[l] };
+            }
+        }
+        let mut mask = 0;
+        for l in 0..NW {
+            mask |= ((tn[l] <= tf[l]) as u32) << l;
+        }
+        (mask, tn)
+    }
+}
+
+/// Result of a block test: bit mask of the lanes hit, and per lane t, `n̂·d` and
+/// `u[k][lane] = (n̂·d)·t_k` (k ≥ 1), meaningful for the lanes hit.
+struct BlockHits<const N: usize> {
+    mask: u32,
+    t: [f64; W],
+    den: [f64; W],
+    u: [[f64; W]; N],
+}
+
+impl<const N: usize> BlockHits<N> {
+    /// Barycentric coordinates of lane l, as [`PreparedSimplex::intersect`] computes them.
+    #[inline(always)]
+    fn bary(&self, l: usize) -> [f64; N] {
+        bary_from(&std::array::from_fn(|k| self.u[k][l]), self.den[l])
+    }
+}
+
+impl<const N: usize> Block<N> {
+    /// Intersects the ray with every lane: which lanes are hit with t in (tmin, tmax), and
+    /// their data. Per lane, exactly the arithmetic of [`PreparedSimplex::intersect`] (the same
+    /// operations in the same order, hence the same bits). Returns early, before the inside
+    /// test, when no lane has t in range.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn hit(&self, ray: &RayLocal<N>, tmin: f64, tmax: f64) -> BlockHits<N> {
+        use std::arch::x86_64::*;
+        const H: usize = W / 2;
+        /// Pairwise sum in the order of [`sum_pairwise`].
+        #[inline(always)]
+        fn sum2<const N: usize>(mut v: [__m128d; N]) -> __m128d {
+            let mut m = N;
+            while m > 1 {
+                let half = m.div_ceil(2);
+                for j in 0..m / 2 {
+                    // SAFETY: SSE2 is part of the x86_64 baseline.
+                    v[j] = unsafe { _mm_add_pd(v[j], v[j + half]) };
+                }
+                m = half;
+            }
+            v[0]
+        }
+        // SAFETY: SSE2 is part of the x86_64 baseline; every pointer loaded or stored is a
+        // `[f64; 4]` accessed as two halves of 16 valid bytes (unaligned accesses).
+        unsafe {
+            let ld = |a: &[f64; W], h: usize| _mm_loadu_pd(a.as_ptr().add(2 * h));
+            let zero = _mm_setzero_pd();
+            let d: [__m128d; N] = std::array::from_fn(|i| _mm_set1_pd(ray.d[i]));
+            let mut out = BlockHits { mask: 0, t: [0.0; W], den: [0.0; W], u: [[0.0; W]; N] };
+            let mut den = [zero; H];
+            let mut num = [zero; H];
+            let mut p = [[zero; N]; H];
+            let mut ok = [zero; H];
+            let mut any = 0;
+            let (par2, lo, hi) = (_mm_set1_pd(ray.par2), _mm_set1_pd(tmin), _mm_set1_pd(tmax));
+            for h in 0..H {
+                den[h] = sum2::<N>(std::array::from_fn(|i| _mm_mul_pd(ld(&self.m[0][i], h), d[i])));
+                p[h] = std::array::from_fn(|i| _mm_sub_pd(ld(&self.x0[i], h), _mm_set1_pd(ray.o[i])));
+                num[h] = sum2::<N>(std::array::from_fn(|i| _mm_mul_pd(ld(&self.m[0][i], h), p[h][i])));
+                let t = _mm_div_pd(num[h], den[h]);
+                let par = _mm_cmpgt_pd(_mm_mul_pd(den[h], den[h]), par2);
+                ok[h] = _mm_and_pd(par, _mm_and_pd(_mm_cmpgt_pd(t, lo), _mm_cmplt_pd(t, hi)));
+                any |= _mm_movemask_pd(ok[h]);
+                _mm_storeu_pd(out.t.as_mut_ptr().add(2 * h), t);
+                _mm_storeu_pd(out.den.as_mut_ptr().add(2 * h), den[h]);
+            }
+            if any == 0 {
+                return out;
+            }
+            let sign = _mm_set1_pd(-0.0);
+            for h in 0..H {
+                let w: [__m128d; N] = std::array::from_fn(|i| {
+                    _mm_sub_pd(_mm_mul_pd(num[h], d[i]), _mm_mul_pd(den[h], p[h][i]))
+                });
+                let abs = _mm_andnot_pd(sign, den[h]);
+                let thr = _mm_mul_pd(_mm_set1_pd(-BARY_SLACK), abs);
+                let flip = _mm_and_pd(sign, den[h]);
+                let mut sum = zero;
+                for k in 1..N {
+                    let u = sum2::<N>(std::array::from_fn(|i| _mm_mul_pd(ld(&self.m[k][i], h), w[i])));
+                    _mm_storeu_pd(out.u[k].as_mut_ptr().add(2 * h), u);
+                    // u_k·sign(n̂·d), exactly (a sign flip).
+                    let v = _mm_xor_pd(u, flip);
+                    ok[h] = _mm_and_pd(ok[h], _mm_cmpge_pd(v, thr));
+                    sum = _mm_add_pd(sum, v);
+                }
+                ok[h] = _mm_and_pd(ok[h], _mm_cmpge_pd(_mm_sub_pd(abs, sum), thr));
+                out.mask |= (_mm_movemask_pd(ok[h]) as u32) << (2 * h);
+            }
+            out.mask &= (1 << self.count) - 1;
+            out
+        }
+    }
+
+    /// The block test of [`Block::hit`] with the 4 lanes in one AVX register: the same
+    /// operations in the same order (no FMA), hence the same bits.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn hit_avx2(&self, ray: &RayLocal<N>, tmin: f64, tmax: f64) -> BlockHits<N> {
+        use std::arch::x86_64::*;
+        #[inline(always)]
+        fn sum4<const N: usize>(mut v: [__m256d; N]) -> __m256d {
+            let mut m = N;
+            while m > 1 {
+                let half = m.div_ceil(2);
+                for j in 0..m / 2 {
+                    // SAFETY: only reached from `hit_avx2`, whose caller guarantees AVX2.
+                    v[j] = unsafe { _mm256_add_pd(v[j], v[j + half]) };
+                }
+                m = half;
+            }
+            v[0]
+        }
+        let ld = |a: &[f64; W]| _mm256_loadu_pd(a.as_ptr());
+        let d: [__m256d; N] = std::array::from_fn(|i| _mm256_set1_pd(ray.d[i]));
+        let mut out = BlockHits { mask: 0, t: [0.0; W], den: [0.0; W], u: [[0.0; W]; N] };
+        let den = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(ld(&self.m[0][i]), d[i])));
+        let p: [__m256d; N] =
+            std::array::from_fn(|i| _mm256_sub_pd(ld(&self.x0[i]), _mm256_set1_pd(ray.o[i])));
+        let num = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(ld(&self.m[0][i]), p[i])));
+        let t = _mm256_div_pd(num, den);
+        let par = _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_mul_pd(den, den), _mm256_set1_pd(ray.par2));
+        let above = _mm256_cmp_pd::<_CMP_GT_OQ>(t, _mm256_set1_pd(tmin));
+        let below = _mm256_cmp_pd::<_CMP_LT_OQ>(t, _mm256_set1_pd(tmax));
+        let mut ok = _mm256_and_pd(par, _mm256_and_pd(above, below));
+        _mm256_storeu_pd(out.t.as_mut_ptr(), t);
+        _mm256_storeu_pd(out.den.as_mut_ptr(), den);
+        if _mm256_movemask_pd(ok) == 0 {
+            return out;
+        }
+        let sign = _mm256_set1_pd(-0.0);
+        let w: [__m256d; N] =
+            std::array::from_fn(|i| _mm256_sub_pd(_mm256_mul_pd(num, d[i]), _mm256_mul_pd(den, p[i])));
+        let abs = _mm256_andnot_pd(sign, den);
+        let thr = _mm256_mul_pd(_mm256_set1_pd(-BARY_SLACK), abs);
+        let flip = _mm256_and_pd(sign, den);
+        let mut sum = _mm256_setzero_pd();
+        for k in 1..N {
+            let u = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(ld(&self.m[k][i]), w[i])));
+            _mm256_storeu_pd(out.u[k].as_mut_ptr(), u);
+            let v = _mm256_xor_pd(u, flip);
+            ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GE_OQ>(v, thr));
+            sum = _mm256_add_pd(sum, v);
+        }
+        ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GE_OQ>(_mm256_sub_pd(abs, sum), thr));
+        out.mask = _mm256_movemask_pd(ok) as u32 & ((1 << self.count) - 1);
+        out
+    }
+
+    /// Portable version of the x86_64 block test above (same arithmetic, same results).
+    #[cfg(not(target_arch = "x86_64"))]
+    #[inline(always)]
+    fn hit(&self, ray: &RayLocal<N>, tmin: f64, tmax: f64) -> BlockHits<N> {
+        let mut out = BlockHits { mask: 0, t: [0.0; W], den: [0.0; W], u: [[0.0; W]; N] };
+        for l in 0..self.count as usize {
+            let lane = PreparedSimplex {
+                m: std::array::from_fn(|k| std::array::from_fn(|i| self.m[k][i][l])),
+                x0: std::array::from_fn(|i| self.x0[i][l]),
+            };
+            let n = &lane.m[0];
+            let den = dot_pairwise(n, &ray.d);
+            let p = sub(&lane.x0, &ray.o);
+            let num = dot_pairwise(n, &p);
+            let w: Vector<N> = std::array::from_fn(|i| num * ray.d[i] - den * p[i]);
+            out.t[l] = num / den;
+            out.den[l] = den;
+            for k in 1..N {
+                out.u[k][l] = dot_pairwise(&lane.m[k], &w);
+            }
+            out.mask |= (lane.hit(ray, tmin, tmax).is_some() as u32) << l;
+        }
+        out
+    }
+}
+
+/// A bounding-volume hierarchy over prepared simplices (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bvh<const N: usize> {
+    /// 4-wide nodes in depth-first order; the root is node 0 (none when empty).
+    nodes: Vec<Node<N>>,
+    /// Leaves, in leaf order.
+    blocks: Vec<Block<N>>,
+    /// Number of simplices.
+    len: usize,
+    /// Bound on |coordinate| of every box of the tree (for the slab test's error bound).
+    reach: f64,
+}
+
+/// A binary node of the build: f32 bounds rounded outward and either two children (the left
+/// one next, `first` the right one) or a leaf range `first .. first + count` (count > 0).
+#[derive(Clone, Copy)]
+struct BNode<const N: usize> {
+    min: [f32; N],
+    max: [f32; N],
+    first: u32,
+    count: u32,
+}
+
+/// Bounds, centroid bounds of a set of simplices.
+#[derive(Clone, Copy)]
+struct Info<const N: usize> {
+    bmin: Vector<N>,
+    bmax: Vector<N>,
+    cmin: Vector<N>,
+    cmax: Vector<N>,
+}
+
+impl<const N: usize> Info<N> {
+    fn empty() -> Self {
+        Info {
+            bmin: [f64::INFINITY; N],
+            bmax: [f64::NEG_INFINITY; N],
+            cmin: [f64::INFINITY; N],
+            cmax: [f64::NEG_INFINITY; N],
+        }
+    }
+
+    fn merge(mut self, o: Self) -> Self {
+        for i in 0..N {
+            self.bmin[i] = self.bmin[i].min(o.bmin[i]);
+            self.bmax[i] = self.bmax[i].max(o.bmax[i]);
+            self.cmin[i] = self.cmin[i].min(o.cmin[i]);
+            self.cmax[i] = self.cmax[i].max(o.cmax[i]);
+        }
+        self
+    }
+}
+
+/// One SAH bin: count and bounds of the simplices whose centroid falls in it.
+#[derive(Clone, Copy)]
+struct Bin<const N: usize> {
+    count: u32,
+    min: Vector<N>,
+    max: Vector<N>,
+}
+
+impl<const N: usize> Bin<N> {
+    const EMPTY: Self = Bin { count: 0, min: [f64::INFINITY; N], max: [f64::NEG_INFINITY; N] };
+
+    #[inline]
+    fn grow(&mut self, lo: &Vector<N>, hi: &Vector<N>, count: u32) {
+        self.count += count;
+        for i in 0..N {
+            self.min[i] = self.min[i].min(lo[i]);
+            self.max[i] = self.max[i].max(hi[i]);
+        }
+    }
+}
+
+type Bins<const N: usize> = [[Bin<N>; BINS]; N];
+
+/// Half the (N−1)-measure of a box's boundary, `Σ_i Π_{j≠i} extent_j` (half the perimeter in
+/// 2D, half the surface area in 3D). By Cauchy's formula the probability that a random line
+/// meets a convex body is proportional to its boundary measure, which makes this the SAH weight
+/// in every N. An empty box (min > max) has measure 0.
+fn half_area<const N: usize>(min: &Vector<N>, max: &Vector<N>) -> f64 {
+    let e: Vector<N> = std::array::from_fn(|i| (max[i] - min[i]).max(0.0));
+    let mut s = 0.0;
+    for i in 0..N {
+        let mut p = 1.0;
+        for j in 0..N {
+            if j != i {
+                p *= e[j];
+            }
+        }
+        s += p;
+    }
+    s
+}
+
+/// SAH cost weight of n simplices: the number of blocks they fill, since a block tests up to
+/// 4 simplices at the price of one.
+#[inline]
+fn blocks_of(n: u32) -> f64 {
+    n.div_ceil(W as u32) as f64
+}
+
+/// Bin of a centroid coordinate: `⌊(c − cmin)·scale⌋` clamped to the last bin. The same
+/// function bins and partitions, so both agree exactly.
+#[inline(always)]
+fn bin_of(c: f64, cmin: f64, scale: f64) -> usize {
+    (((c - cmin) * scale) as usize).min(BINS - 1)
+}
+
+/// Reorders `idx` so that the elements satisfying `left` come first; returns their number.
+fn partition(idx: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+    let (mut i, mut j) = (0, idx.len());
+    loop {
+        while i < j && left(idx[i]) {
+            i += 1;
+        }
+        while i < j && !left(idx[j - 1]) {
+            j -= 1;
+        }
+        if i >= j {
+            return i;
+        }
+        idx.swap(i, j - 1);
+        i += 1;
+        j -= 1;
+    }
+}
+
+/// Build inputs: padded bounds and centroids of every simplex (by input index).
+struct Builder<const N: usize> {
+    bounds: Vec<(Vector<N>, Vector<N>)>,
+    cent: Vec<Vector<N>>,
+    par_min: usize,
+}
+
+/// A binary subtree built in parallel: either a flat run of nodes (child indices relative to its
+/// start) or an inner node over two such subtrees. Flattened once at the end, in depth-first
+/// order, so the layout does not depend on which parts were built in parallel.
+enum Built<const N: usize> {
+    Flat(Vec<BNode<N>>),
+    Split(BNode<N>, Box<Built<N>>, Box<Built<N>>),
+}
+
+impl<const N: usize> Builder<N> {
+    fn info_seq(&self, idx: &[u32]) -> Info<N> {
+        let mut info = Info::empty();
+        for &p in idx {
+            let (lo, hi) = &self.bounds[p as usize];
+            let c = &self.cent[p as usize];
+            for i in 0..N {
+                info.bmin[i] = info.bmin[i].min(lo[i]);
+                info.bmax[i] = info.bmax[i].max(hi[i]);
+                info.cmin[i] = info.cmin[i].min(c[i]);
+                info.cmax[i] = info.cmax[i].max(c[i]);
+            }
+        }
+        info
+    }
+
+    /// Bounds and centroid bounds; min/max are exact, so the parallel reduction gives the same
+    /// result as the sequential loop.
+    fn info(&self, idx: &[u32]) -> Info<N> {
+        if idx.len() >= self.par_min.max(2 * PAR_CHUNK) {
+            idx.par_chunks(PAR_CHUNK).map(|c| self.info_seq(c)).reduce(Info::empty, Info::merge)
+        } else {
+            self.info_seq(idx)
+        }
+    }
+
+    fn bin_seq(&self, idx: &[u32], cmin: &Vector<N>, scale: &Vector<N>) -> Bins<N> {
+        let mut bins = [[Bin::EMPTY; BINS]; N];
+        for &p in idx {
+            let (lo, hi) = &self.bounds[p as usize];
+            let c = &self.cent[p as usize];
+            for a in 0..N {
+                if scale[a] > 0.0 {
+                    bins[a][bin_of(c[a], cmin[a], scale[a])].grow(lo, hi, 1);
+                }
+            }
+        }
+        bins
+    }
+
+    /// The SAH bins; counts and min/max are exact, so the parallel reduction is deterministic.
+    fn bins(&self, idx: &[u32], cmin: &Vector<N>, scale: &Vector<N>) -> Bins<N> {
+        if idx.len() >= self.par_min.max(2 * PAR_CHUNK) {
+            idx.par_chunks(PAR_CHUNK).map(|c| self.bin_seq(c, cmin, scale)).reduce(
+                || [[Bin::EMPTY; BINS]; N],
+                |mut a, b| {
+                    for ax in 0..N {
+                        for k in 0..BINS {
+                            a[ax][k].grow(&b[ax][k].min, &b[ax][k].max, b[ax][k].count);
+                        }
+                    }
+                    a
+                },
+            )
+        } else {
+            self.bin_seq(idx, cmin, scale)
+        }
+    }
+
+    /// Chooses how to split the node over `idx` and partitions `idx` accordingly: `None` for a
+    /// leaf (at most `MAX_LEAF` simplices: a block tests them at the price of one), `Some(mid)`
+    /// for children `idx[..mid]` and `idx[mid..]` (both non-empty).
+    fn split(&self, idx: &mut [u32], info: &Info<N>, depth: usize) -> Option<usize> {
+        let n = idx.len();
+        if n <= MAX_LEAF {
+            return None;
+        }
+        let mut scale = [0.0; N];
+        for a in 0..N {
+            let ext = info.cmax[a] - info.cmin[a];
+            let s = BINS as f64 / ext;
+            if ext > 0.0 && s.is_finite() {
+                scale[a] = s;
+            }
+        }
+        if depth < MAX_SAH_DEPTH && scale.iter().any(|&s| s > 0.0) {
+            let bins = self.bins(idx, &info.cmin, &scale);
+            // (cost, axis, first bin of the right side); ties keep the first candidate.
+            let mut best: Option<(f64, usize, usize)> = None;
+            for a in 0..N {
+                if scale[a] == 0.0 {
+                    continue;
+                }
+                // Suffix sweep: right_cost[s] = area(bins s..) · blocks(bins s..).
+                let mut right_cost = [0.0; BINS];
+                let mut acc = Bin::EMPTY;
+                for s in (1..BINS).rev() {
+                    let b = &bins[a][s];
+                    acc.grow(&b.min, &b.max, b.count);
+                    right_cost[s] = half_area(&acc.min, &acc.max) * blocks_of(acc.count);
+                }
+                let mut left = Bin::EMPTY;
+                for s in 1..BINS {
+                    let b = &bins[a][s - 1];
+                    left.grow(&b.min, &b.max, b.count);
+                    let n_left = left.count as usize;
+                    if n_left == 0 || n_left == n {
+                        continue;
+                    }
+                    let cost = half_area(&left.min, &left.max) * blocks_of(left.count) + right_cost[s];
+                    if best.is_none_or(|(c, _, _)| cost < c) {
+                        best = Some((cost, a, s));
+                    }
+                }
+            }
+            if let Some((_, a, s)) = best {
+                let (cmin, sc) = (info.cmin[a], scale[a]);
+                let mid = partition(idx, |p| bin_of(self.cent[p as usize][a], cmin, sc) < s);
+                debug_assert!(mid > 0 && mid < n);
+                return Some(mid);
+            }
+        }
+        // Object-median split on the axis of largest centroid extent (ties: lowest axis, then
+        // input index), which always splits and halves the count.
+        let mut axis = 0;
+        for a in 1..N {
+            if info.cmax[a] - info.cmin[a] > info.cmax[axis] - info.cmin[axis] {
+                axis = a;
+            }
+        }
+        let mid = n / 2;
+        let cent = &self.cent;
+        idx.select_nth_unstable_by(mid, |&p, &q| {
+            cent[p as usize][axis].total_cmp(&cent[q as usize][axis]).then(p.cmp(&q))
+        });
+        Some(mid)
+    }
+
+    fn node(info: &Info<N>) -> BNode<N> {
+        BNode {
+            min: std::array::from_fn(|i| f32_down(info.bmin[i])),
+            max: std::array::from_fn(|i| f32_up(info.bmax[i])),
+            first: 0,
+            count: 0,
+        }
+    }
+
+    /// Sequential build of the subtree over `idx` (at position `offset` of the final order),
+    /// appending to `out` with node indices relative to the start of `out`.
+    fn build_seq(&self, idx: &mut [u32], offset: usize, depth: usize, out: &mut Vec<BNode<N>>) {
+        let info = self.info_seq(idx);
+        let me = out.len();
+        out.push(Self::node(&info));
+        match self.split(idx, &info, depth) {
+            None => {
+                out[me].first = offset as u32;
+                out[me].count = idx.len() as u32;
+            }
+            Some(mid) => {
+                let (l, r) = idx.split_at_mut(mid);
+                self.build_seq(l, offset, depth + 1, out);
+                out[me].first = out.len() as u32;
+                self.build_seq(r, offset + mid, depth + 1, out);
+            }
+        }
+    }
+
+    /// Build of the subtree over `idx`, forking with rayon for large nodes.
+    fn build_par(&self, idx: &mut [u32], offset: usize, depth: usize) -> Built<N> {
+        if idx.len() < self.par_min {
+            let mut out = Vec::with_capacity(idx.len() / 2 + 1);
+            self.build_seq(idx, offset, depth, &mut out);
+            return Built::Flat(out);
+        }
+        let info = self.info(idx);
+        let mut node = Self::node(&info);
+        match self.split(idx, &info, depth) {
+            None => {
+                node.first = offset as u32;
+                node.count = idx.len() as u32;
+                Built::Flat(vec![node])
+            }
+            Some(mid) => {
+                let (l, r) = idx.split_at_mut(mid);
+                let (bl, br) = rayon::join(
+                    || self.build_par(l, offset, depth + 1),
+                    || self.build_par(r, offset + mid, depth + 1),
+                );
+                Built::Split(node, Box::new(bl), Box::new(br))
+            }
+        }
+    }
+}
+
+/// Appends a built subtree in depth-first order, rebasing inner nodes' child indices.
+fn flatten<const N: usize>(b: Built<N>, out: &mut Vec<BNode<N>>) {
+    match b {
+        Built::Flat(v) => {
+            let base = out.len() as u32;
+            out.extend(v.into_iter().map(|mut nd| {
+                if nd.count == 0 {
+                    nd.first += base;
+                }
+                nd
+            }));
+        }
+        Built::Split(node, l, r) => {
+            let me = out.len();
+            out.push(node);
+            flatten(*l, out);
+            out[me].first = out.len() as u32;
+            flatten(*r, out);
+        }
+    }
+}
+
+/// Collapses the binary tree into 4-wide nodes and blocks (both in depth-first order).
+struct Collapse<'a, const N: usize> {
+    bin: &'a [BNode<N>],
+    prims: &'a [PreparedSimplex<N>],
+    ids: &'a [u32],
+    nodes: Vec<Node<N>>,
+    blocks: Vec<Block<N>>,
+}
+
+impl<const N: usize> Collapse<'_, N> {
+    fn area(&self, b: usize) -> f64 {
+        let nd = &self.bin[b];
+        half_area(&nd.min.map(f64::from), &nd.max.map(f64::from))
+    }
+
+    /// The reference (node index or `LEAF | block`) of binary node `b`'s subtree.
+    fn child_ref(&mut self, b: usize) -> u32 {
+        if self.bin[b].count > 0 {
+            self.leaf(b)
+        } else {
+            self.node(b)
+        }
+    }
+
+    fn leaf(&mut self, b: usize) -> u32 {
+        let nd = self.bin[b];
+        let mut block = Block { m: [[[0.0; W]; N]; N], x0: [[0.0; W]; N], ids: [EMPTY; W], count: nd.count };
+        for l in 0..nd.count as usize {
+            let p = &self.prims[nd.first as usize + l];
+            for k in 0..N {
+                for i in 0..N {
+                    block.m[k][i][l] = p.m[k][i];
+                }
+            }
+            for i in 0..N {
+                block.x0[i][l] = p.x0[i];
+            }
+            block.ids[l] = self.ids[nd.first as usize + l];
+        }
+        self.blocks.push(block);
+        LEAF | (self.blocks.len() - 1) as u32
+    }
+
+    /// A wide node over binary inner node `b`: its children, with the inner child of largest
+    /// area repeatedly replaced by its two children (in place, keeping the left-to-right order)
+    /// until there are `NW` or only leaves.
+    fn node(&mut self, b: usize) -> u32 {
+        let mut kids: Vec<usize> = vec![b + 1, self.bin[b].first as usize];
+        while kids.len() < NW {
+            let mut pick: Option<(f64, usize)> = None;
+            for (j, &c) in kids.iter().enumerate() {
+                if self.bin[c].count == 0 {
+                    let a = self.area(c);
+                    if pick.is_none_or(|(pa, _)| a > pa) {
+                        pick = Some((a, j));
+                    }
+                }
+            }
+            let Some((_, j)) = pick else { break };
+            let c = kids[j];
+            kids.splice(j..=j, [c + 1, self.bin[c].first as usize]);
+        }
+        let me = self.nodes.len();
+        self.nodes.push(Node::EMPTY);
+        for (l, &c) in kids.iter().enumerate() {
+            let r = self.child_ref(c);
+            let nd = &mut self.nodes[me];
+            nd.child[l] = r;
+            for i in 0..N {
+                nd.b[0][i][l] = self.bin[c].min[i];
+                nd.b[1][i][l] = self.bin[c].max[i];
+            }
+        }
+        me as u32
+    }
+}
+
+/// Best hit so far of a closest-hit traversal.
+struct Best<const N: usize> {
+    t: f64,
+    id: u32,
+    bary: [f64; N],
+    found: bool,
+}
+
+impl<const N: usize> Bvh<N> {
+    /// Builds over prepared simplices; `ids[i]` is the caller's id of `prims[i]` (returned in
+    /// [`Hit::prim`]) and `bounds[i]` the (min, max) corners of its vertices.
+    ///
+    /// Deterministic: every decision depends only on the input (bins are integer counts and
+    /// min/max, exact in any reduction order; ties go to the lowest axis, bin or index), and the
+    /// parallel parts are flattened in depth-first order, so the tree is identical for any
+    /// number of threads.
+    ///
+    /// # Panics
+    /// If the three vectors differ in length or hold 2³¹ or more simplices.
+    pub fn build(
+        prims: Vec<PreparedSimplex<N>>,
+        ids: Vec<u32>,
+        bounds: Vec<([f64; N], [f64; N])>,
+    ) -> Self {
+        Self::build_with(prims, ids, bounds, PAR_MIN)
+    }
+
+    fn build_with(
+        prims: Vec<PreparedSimplex<N>>,
+        ids: Vec<u32>,
+        bounds: Vec<([f64; N], [f64; N])>,
+        par_min: usize,
+    ) -> Self {
+        let n = prims.len();
+        assert!(ids.len() == n && bounds.len() == n, "Bvh::build: prims, ids, bounds lengths differ");
+        assert!(n < LEAF as usize, "Bvh::build: too many simplices");
+        if n == 0 {
+            return Bvh { nodes: Vec::new(), blocks: Vec::new(), len: 0, reach: 0.0 };
+        }
+        // Pad each box by BOX_PAD of its largest extent, so that it contains the BARY_SLACK band.
+        let padded: Vec<(Vector<N>, Vector<N>)> = bounds
+            .into_iter()
+            .map(|(lo, hi)| {
+                let ext = (0..N).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
+                let pad = BOX_PAD * ext;
+                (std::array::from_fn(|i| lo[i] - pad), std::array::from_fn(|i| hi[i] + pad))
+            })
+            .collect();
+        let cent =
+            padded.iter().map(|(lo, hi)| std::array::from_fn(|i| 0.5 * (lo[i] + hi[i]))).collect();
+        let builder = Builder { bounds: padded, cent, par_min: par_min.max(2) };
+        let mut idx: Vec<u32> = (0..n as u32).collect();
+        let built = builder.build_par(&mut idx, 0, 0);
+        drop(builder);
+        let mut bin = Vec::new();
+        flatten(built, &mut bin);
+        let prims: Vec<PreparedSimplex<N>> = idx.iter().map(|&p| prims[p as usize]).collect();
+        let ids: Vec<u32> = idx.iter().map(|&p| ids[p as usize]).collect();
+        let mut c = Collapse { bin: &bin, prims: &prims, ids: &ids, nodes: Vec::new(), blocks: Vec::new() };
+        if bin[0].count > 0 {
+            // A single leaf: a root node with one child.
+            c.nodes.push(Node::EMPTY);
+            let r = c.leaf(0);
+            c.nodes[0].child[0] = r;
+            for i in 0..N {
+                c.nodes[0].b[0][i][0] = bin[0].min[i];
+                c.nodes[0].b[1][i][0] = bin[0].max[i];
+            }
+        } else {
+            c.node(0);
+        }
+        let (mut nodes, mut blocks) = (c.nodes, c.blocks);
+        nodes.shrink_to_fit();
+        blocks.shrink_to_fit();
+        let root = &bin[0];
+        let reach = (0..N)
+            .map(|i| f64::from(root.min[i].abs()).max(f64::from(root.max[i].abs())))
+            .fold(0.0, f64::max);
+        // Non-finite bounds only widen the slab test (and the shift saturates to infinity).
+        let reach = if reach.is_finite() { reach } else { f64::from(f32::MAX) };
+        Bvh { nodes, blocks, len: n, reach }
+    }
+
+    /// Builds over the non-degenerate simplices of `points`, with `ids[i]` the id of
+    /// `points[i]` (degenerate ones are skipped). Preparation runs in parallel.
+    pub fn from_simplices(points: &[[[f64; N]; N]], ids: &[u32]) -> Self {
+        assert_eq!(points.len(), ids.len(), "Bvh::from_simplices: points and ids lengths differ");
+        let prepared: Vec<(PreparedSimplex<N>, u32, ([f64; N], [f64; N]))> = points
+            .par_iter()
+            .zip(ids.par_iter())
+            .filter_map(|(p, &id)| Some((PreparedSimplex::new(p)?, id, simplex_bounds(p))))
+            .collect();
+        let mut prims = Vec::with_capacity(prepared.len());
+        let mut pids = Vec::with_capacity(prepared.len());
+        let mut bounds = Vec::with_capacity(prepared.len());
+        for (p, id, b) in prepared {
+            prims.push(p);
+            pids.push(id);
+            bounds.push(b);
+        }
+        Self::build(prims, pids, bounds)
+    }
+
+    /// Builds over the non-degenerate simplices of a mesh; a hit's `prim` is the simplex index.
+    pub fn from_mesh(mesh: &Mesh<N>) -> Self {
+        let points: Vec<[[f64; N]; N]> =
+            (0..mesh.simplices.len()).into_par_iter().map(|s| mesh.simplex_points(s)).collect();
+        let ids: Vec<u32> = (0..points.len() as u32).collect();
+        Self::from_simplices(&points, &ids)
+    }
+
+    /// Number of simplices.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether there are no simplices.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Number of (4-wide) nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Number of leaves (blocks of up to 4 simplices).
+    pub fn leaf_count(&self) -> usize {
+        self.blocks.len()
+    }
+
+    /// Memory used by nodes + prims (the leaf blocks, with their ids), in bytes.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node<N>>()
+            + self.blocks.len() * std::mem::size_of::<Block<N>>()
+    }
+
+    /// Depth of the 4-wide tree counting the leaf level (0 when empty).
+    pub fn depth(&self) -> usize {
+        fn rec<const N: usize>(nodes: &[Node<N>], i: usize) -> usize {
+            let deepest = nodes[i]
+                .child
+                .iter()
+                .map(|&c| if c == EMPTY || c & LEAF != 0 { 1 } else { rec(nodes, c as usize) })
+                .max()
+                .unwrap_or(0);
+            1 + deepest
+        }
+        if self.nodes.is_empty() {
+            0
+        } else {
+            rec(&self.nodes, 0)
+        }
+    }
+
+    /// Nearest hit with t in (tmin, tmax) among the simplices whose id passes `accept`.
+    /// Deterministic: on an exact tie in t, the smaller id wins (so the result is the minimum of
+    /// (t, id) over all accepted hits, independently of the tree's shape).
+    pub fn closest_hit(
+        &self,
+        ray: &Ray<N>,
+        tmin: f64,
+        tmax: f64,
+        accept: impl Fn(u32) -> bool,
+    ) -> Option<Hit<N>> {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 is available.
+            return unsafe { self.closest_hit_avx2(ray, tmin, tmax, accept) };
+        }
+        self.closest_hit_impl::<false>(ray, tmin, tmax, accept)
+    }
+
+    /// [`Bvh::closest_hit`] compiled for AVX2 (same results).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn closest_hit_avx2(
+        &self,
+        ray: &Ray<N>,
+        tmin: f64,
+        tmax: f64,
+        accept: impl Fn(u32) -> bool,
+    ) -> Option<Hit<N>> {
+        self.closest_hit_impl::<true>(ray, tmin, tmax, accept)
+    }
+
+    /// Whether any simplex whose id passes `accept` is hit with t in (tmin, tmax) (shadow rays;
+    /// stops at the first such hit).
+    pub fn any_hit(&self, ray: &Ray<N>, tmin: f64, tmax: f64, accept: impl Fn(u32) -> bool) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 is available.
+            return unsafe { self.any_hit_avx2(ray, tmin, tmax, accept) };
+        }
+        self.any_hit_impl::<false>(ray, tmin, tmax, accept)
+    }
+
+    /// [`Bvh::any_hit`] compiled for AVX2 (same results).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn any_hit_avx2(&self, ray: &Ray<N>, tmin: f64, tmax: f64, accept: impl Fn(u32) -> bool) -> bool {
+        self.any_hit_impl::<true>(ray, tmin, tmax, accept)
+    }
+
+    /// Tests a block, with the AVX2 kernel when `AVX` (only instantiated inside functions
+    /// compiled for AVX2).
+    #[inline(always)]
+    fn block_hit<const AVX: bool>(&self, block: &Block<N>, ray: &RayLocal<N>, tmin: f64, tmax: f64) -> BlockHits<N> {
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            // SAFETY: `AVX` is only true in code running after an AVX2 check.
+            return unsafe { block.hit_avx2(ray, tmin, tmax) };
+        }
+        block.hit(ray, tmin, tmax)
+    }
+
+    /// Slab test with the AVX2 kernel when `AVX` (only instantiated inside functions compiled
+    /// for AVX2).
+    #[inline(always)]
+    fn slab<const AVX: bool>(&self, pre: &RayPre<N>, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
+        #[cfg(target_arch = "x86_64")]
+        if AVX && NW == 8 {
+            // SAFETY: `AVX` is only true in code running after an AVX2 check.
+            return unsafe { pre.slab_avx2(node, lo, hi) };
+        }
+        pre.slab(node, lo, hi)
+    }
+
+    /// Tests the children of inner node `cur` against [lo, hi] and returns the nearest child
+    /// met (`EMPTY` if none), after pushing the other children met with their entry
+    /// parameters, farthest first (so they are popped nearest first).
+    #[inline(always)]
+    fn descend<const AVX: bool>(
+        &self,
+        pre: &RayPre<N>,
+        cur: u32,
+        lo: f32,
+        hi: f32,
+        stack: &mut [MaybeUninit<(u32, f32)>; STACK_SIZE],
+        sp: &mut usize,
+    ) -> u32 {
+        let nd = &self.nodes[cur as usize];
+        let (mask, tn) = self.slab::<AVX>(pre, nd, lo, hi);
+        if mask == 0 {
+            return EMPTY;
+        }
+        if mask & (mask - 1) == 0 {
+            return nd.child[mask.trailing_zeros() as usize];
+        }
+        // Insertion sort of the children met by entry parameter, nearest last.
+        let mut hits = [(0u32, 0.0f32); NW];
+        let mut c = 0;
+        let mut m = mask;
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let mut j = c;
+            while j > 0 && hits[j - 1].1 < tn[l] {
+                hits[j] = hits[j - 1];
+                j -= 1;
+            }
+            hits[j] = (nd.child[l], tn[l]);
+            c += 1;
+        }
+        for h in &hits[..c - 1] {
+            stack[*sp].write(*h);
+            *sp += 1;
+        }
+        hits[c - 1].0
+    }
+
+    #[inline(always)]
+    fn closest_hit_impl<const AVX: bool>(
+        &self,
+        ray: &Ray<N>,
+        tmin: f64,
+        tmax: f64,
+        accept: impl Fn(u32) -> bool,
+    ) -> Option<Hit<N>> {
+        if self.nodes.is_empty() || !(tmin < tmax) {
+            return None;
+        }
+        let pre = RayPre::new(ray, self.reach);
+        // Boxes are culled against [tmin, best] widened (T_PAD, then outward to f32); simplices
+        // use the exact open interval.
+        let lo = f32_down(pad_down(tmin));
+        let mut limit = f32_up(pad_up(tmax));
+        let mut best = Best { t: tmax, id: u32::MAX, bary: [0.0; N], found: false };
+        let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK_SIZE];
+        let mut sp = 0usize;
+        let mut cur = 0u32;
+        loop {
+            // Descend through inner nodes, nearest child first.
+            while cur & LEAF == 0 {
+                cur = self.descend::<AVX>(&pre, cur, lo, limit, &mut stack, &mut sp);
+            }
+            if cur != EMPTY {
+                let block = &self.blocks[(cur & !LEAF) as usize];
+                // While a hit is held, accept t ≤ best.t (ties are settled by id).
+                let tmax_b = if best.found { best.t.next_up() } else { tmax };
+                let hits = self.block_hit::<AVX>(block, &pre.local, tmin, tmax_b);
+                let mut mask = hits.mask;
+                while mask != 0 {
+                    let l = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let (t, id) = (hits.t[l], block.ids[l]);
+                    if (!best.found || t < best.t || (t == best.t && id < best.id)) && accept(id) {
+                        best = Best { t, id, bary: hits.bary(l), found: true };
+                        limit = f32_up(pad_up(t));
+                    }
+                }
+            }
+            // Pop the next subtree whose entry parameter is still within reach.
+            loop {
+                if sp == 0 {
+                    return best.found.then_some(Hit { t: best.t, prim: best.id, bary: best.bary });
+                }
+                sp -= 1;
+                // SAFETY: the entries below `sp` were all written by `descend`.
+                let (r, t) = unsafe { stack[sp].assume_init() };
+                if t <= limit {
+                    cur = r;
+                    break;
+                }
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn any_hit_impl<const AVX: bool>(
+        &self,
+        ray: &Ray<N>,
+        tmin: f64,
+        tmax: f64,
+        accept: impl Fn(u32) -> bool,
+    ) -> bool {
+        if self.nodes.is_empty() || !(tmin < tmax) {
+            return false;
+        }
+        let pre = RayPre::new(ray, self.reach);
+        let lo = f32_down(pad_down(tmin));
+        let hi = f32_up(pad_up(tmax));
+        let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK_SIZE];
+        let mut sp = 0usize;
+        let mut cur = 0u32;
+        loop {
+            while cur & LEAF == 0 {
+                cur = self.descend::<AVX>(&pre, cur, lo, hi, &mut stack, &mut sp);
+            }
+            if cur != EMPTY {
+                let block = &self.blocks[(cur & !LEAF) as usize];
+                let mut mask = self.block_hit::<AVX>(block, &pre.local, tmin, tmax).mask;
+                while mask != 0 {
+                    let l = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if accept(block.ids[l]) {
+                        return true;
+                    }
+                }
+            }
+            if sp == 0 {
+                return false;
+            }
+            sp -= 1;
+            // SAFETY: the entries below `sp` were all written by `descend`.
+            cur = unsafe { stack[sp].assume_init() }.0;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{barycentric, ray_hyperplane};
+    use crate::linalg::{add, add_scaled, mat_vec, norm, scale};
+    use crate::testutil::{for_each_dim, random_rotation, random_vector, rng, TestRng};
+    use rand::Rng;
+    use std::collections::HashSet;
+
+    /// Random simplex with vertices `center + random_vector(size)`.
+    fn random_simplex<const N: usize>(r: &mut TestRng, center: &Vector<N>, size: f64) -> [[f64; N]; N] {
+        std::array::from_fn(|_| add(center, &random_vector::<N>(r, size)))
+    }
+
+    /// A point of the simplex's hyperplane with random barycentric weights in [lo, hi] (then
+    /// normalized to sum 1).
+    fn plane_point<const N: usize>(r: &mut TestRng, pts: &[[f64; N]; N], lo: f64, hi: f64) -> Vector<N> {
+        let mut w: Vec<f64> = (0..N).map(|_| r.random_range(lo..hi)).collect();
+        let s: f64 = w.iter().sum();
+        w.iter_mut().for_each(|x| *x /= s);
+        let mut x = [0.0; N];
+        for (p, wi) in pts.iter().zip(&w) {
+            x = add_scaled(&x, *wi, p);
+        }
+        x
+    }
+
+    fn intersect_agrees_with_geometry<const N: usize>() {
+        let mut r = rng(1000 + N as u64);
+        let (mut hits, mut misses, mut near_edge) = (0, 0, 0);
+        for case in 0..3000 {
+            let pts = random_simplex::<N>(&mut r, &[0.0; N], 2.0);
+            let Some(ps) = PreparedSimplex::new(&pts) else {
+                assert!(hyperplane(&pts).is_err());
+                continue;
+            };
+            let plane = hyperplane(&pts).unwrap();
+            assert_eq!(ps.normal(), plane.normal, "N={N}");
+            assert_eq!(ps.origin(), pts[0]);
+            let origin = random_vector::<N>(&mut r, 4.0);
+            let target = plane_point(&mut r, &pts, -0.12, 1.0);
+            let dir = scale(&crate::linalg::sub(&target, &origin), r.random_range(0.2..3.0));
+            let ray = Ray { origin, dir };
+            let (tmin, tmax) = if case % 4 == 0 { (0.5, 2.0) } else { (0.0, f64::INFINITY) };
+            let got = ps.intersect(&ray, tmin, tmax);
+            // Independent computation: eq. of section "Ray Tracing" + Gram/Cramer barycentrics.
+            let t = ray_hyperplane(&origin, &dir, &pts).unwrap();
+            let mut bary = [0.0; 9];
+            barycentric(&ray.at(t), &pts, &mut bary).unwrap();
+            let min_bary = bary[..N].iter().cloned().fold(f64::INFINITY, f64::min);
+            let expect = t > tmin && t < tmax && min_bary >= 0.0;
+            if min_bary.abs() <= 1e-9 || (t - tmin).abs() < 1e-9 || (t - tmax).abs() < 1e-9 {
+                near_edge += 1;
+            } else {
+                assert_eq!(got.is_some(), expect, "N={N} case {case}: t={t} bary={bary:?}");
+            }
+            if let Some((gt, gb)) = got {
+                hits += 1;
+                assert!((gt - t).abs() <= 1e-9 * t.abs().max(1.0), "N={N}: t {gt} vs {t}");
+                for k in 0..N {
+                    assert!((gb[k] - bary[k]).abs() <= 1e-9, "N={N}: bary {gb:?} vs {bary:?}");
+                }
+                let s: f64 = gb.iter().sum();
+                assert!((s - 1.0).abs() < 1e-12);
+            } else {
+                misses += 1;
+            }
+            // A direction inside the hyperplane is parallel: a miss.
+            let along = crate::linalg::sub(&pts[1], &pts[0]);
+            assert_eq!(ps.intersect(&Ray { origin, dir: along }, f64::NEG_INFINITY, f64::INFINITY), None);
+            assert_eq!(ps.intersect(&Ray { origin, dir: [0.0; N] }, f64::NEG_INFINITY, f64::INFINITY), None);
+        }
+        assert!(hits > 400 && misses > 400 && near_edge < 30, "N={N}: {hits} {misses} {near_edge}");
+    }
+
+    #[test]
+    fn accel_prepared_simplex_intersect_agrees_with_geometry() {
+        for_each_dim!(intersect_agrees_with_geometry);
+    }
+
+    #[test]
+    fn accel_degenerate_simplices_are_rejected() {
+        assert!(PreparedSimplex::<3>::new(&[[0.0; 3], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0]]).is_none());
+        assert!(PreparedSimplex::<2>::new(&[[1.0, 2.0], [1.0, 2.0]]).is_none());
+        assert!(PreparedSimplex::<2>::new(&[[f64::NAN, 0.0], [1.0, 2.0]]).is_none());
+        // Both vertex orders give the same hit; the normal flips (eq. 6).
+        let a = PreparedSimplex::<3>::new(&[[0., 0., 0.], [1., 0., 0.], [0., 1., 0.]]).unwrap();
+        let b = PreparedSimplex::<3>::new(&[[0., 0., 0.], [0., 1., 0.], [1., 0., 0.]]).unwrap();
+        assert_eq!(a.normal(), [0., 0., 1.]);
+        assert_eq!(b.normal(), [0., 0., -1.]);
+        let ray = Ray { origin: [0.25, 0.25, 2.0], dir: [0.0, 0.0, -1.0] };
+        let (ta, ba) = a.intersect(&ray, 0.0, f64::INFINITY).unwrap();
+        let (tb, bb) = b.intersect(&ray, 0.0, f64::INFINITY).unwrap();
+        assert_eq!((ta, tb), (2.0, 2.0));
+        assert_eq!(ba, [0.5, 0.25, 0.25]);
+        assert_eq!(bb, [0.5, 0.25, 0.25]);
+        // The interval is open.
+        assert!(a.intersect(&ray, 0.0, 2.0).is_none());
+        assert!(a.intersect(&ray, 2.0, 3.0).is_none());
+    }
+
+    /// Brute force over all simplices: the minimum of (t, id) over accepted hits.
+    fn brute<const N: usize>(
+        prims: &[(PreparedSimplex<N>, u32)],
+        ray: &Ray<N>,
+        tmin: f64,
+        tmax: f64,
+        accept: impl Fn(u32) -> bool,
+    ) -> Option<Hit<N>> {
+        let mut best: Option<Hit<N>> = None;
+        for (p, id) in prims {
+            if !accept(*id) {
+                continue;
+            }
+            if let Some((t, bary)) = p.intersect(ray, tmin, tmax) {
+                if best.is_none_or(|b| t < b.t || (t == b.t && *id < b.prim)) {
+                    best = Some(Hit { t, prim: *id, bary });
+                }
+            }
+        }
+        best
+    }
+
+    /// A soup of `count` small random simplices (plus a few large ones and exact duplicates with
+    /// other ids, which tie exactly), with scattered ids.
+    fn soup<const N: usize>(r: &mut TestRng, count: usize) -> Vec<([[f64; N]; N], u32)> {
+        let mut out = vec![];
+        for i in 0..count {
+            let size = if i % 50 == 0 { 1.5 } else { 0.35 };
+            let c = random_vector::<N>(r, 2.0);
+            out.push((random_simplex(r, &c, size), (7 * i as u32 + 3) ^ 0x55));
+        }
+        for j in 0..count / 20 {
+            let (pts, id) = out[j * 7 % count];
+            out.push((pts, id ^ 0x1000));
+        }
+        out
+    }
+
+    fn prepare<const N: usize>(soup: &[([[f64; N]; N], u32)]) -> Vec<(PreparedSimplex<N>, u32)> {
+        soup.iter().filter_map(|(p, id)| Some((PreparedSimplex::new(p)?, *id))).collect()
+    }
+
+    fn build_soup<const N: usize>(soup: &[([[f64; N]; N], u32)], par_min: usize) -> Bvh<N> {
+        let mut prims = vec![];
+        let mut ids = vec![];
+        let mut bounds = vec![];
+        for (p, id) in soup {
+            if let Some(ps) = PreparedSimplex::new(p) {
+                prims.push(ps);
+                ids.push(*id);
+                bounds.push(simplex_bounds(p));
+            }
+        }
+        Bvh::build_with(prims, ids, bounds, par_min)
+    }
+
+    fn bvh_agrees_with_brute_force<const N: usize>() {
+        let mut r = rng(2000 + N as u64);
+        for (round, count) in [1usize, 3, 5, 17, 300].into_iter().enumerate() {
+            let s = soup::<N>(&mut r, count);
+            let prims = prepare(&s);
+            let bvh = build_soup(&s, PAR_MIN);
+            assert_eq!(bvh.len(), prims.len());
+            assert!(bvh.blocks.iter().all(|b| (1..=W as u32).contains(&b.count)));
+            let (mut hits, mut ties) = (0, 0);
+            for case in 0..1500 {
+                let origin = random_vector::<N>(&mut r, 3.5);
+                let dir = if case % 2 == 0 {
+                    // Aim at a point of a random simplex, so that most rays hit something.
+                    let (pts, _) = &s[r.random_range(0..s.len())];
+                    crate::linalg::sub(&plane_point(&mut r, pts, 0.0, 1.0), &origin)
+                } else {
+                    random_vector::<N>(&mut r, 1.0)
+                };
+                let ray = Ray { origin, dir };
+                let (tmin, tmax) = match case % 5 {
+                    0 => (0.0, f64::INFINITY),
+                    1 => (0.3, 0.9),
+                    2 => (-1.0, 1.0),
+                    3 => (0.0, 1.0),
+                    _ => (0.5, f64::INFINITY),
+                };
+                let filters: [&dyn Fn(u32) -> bool; 3] =
+                    [&|_| true, &|id| id % 3 != 0, &|id| id & 0x1000 == 0];
+                for (fi, f) in filters.iter().enumerate() {
+                    let want = brute(&prims, &ray, tmin, tmax, f);
+                    let got = bvh.closest_hit(&ray, tmin, tmax, f);
+                    assert_eq!(got, want, "N={N} round {round} case {case} filter {fi}");
+                    assert_eq!(bvh.any_hit(&ray, tmin, tmax, f), want.is_some(), "N={N} any_hit");
+                    if let Some(h) = want {
+                        hits += 1;
+                        let same_t = prims.iter().filter(|(p, id)| {
+                            f(*id) && p.intersect(&ray, tmin, tmax).is_some_and(|(t, _)| t == h.t)
+                        });
+                        ties += (same_t.count() > 1) as usize;
+                    }
+                }
+            }
+            if count == 300 {
+                assert!(hits > 1000 && ties > 10, "N={N}: {hits} hits, {ties} exact ties");
+            }
+        }
+    }
+
+    #[test]
+    fn accel_bvh_closest_and_any_hit_equal_brute_force() {
+        for_each_dim!(bvh_agrees_with_brute_force);
+    }
+
+    #[test]
+    fn accel_empty_bvh_misses() {
+        let bvh = Bvh::<3>::build(vec![], vec![], vec![]);
+        assert!(bvh.is_empty() && bvh.len() == 0 && bvh.node_count() == 0 && bvh.depth() == 0);
+        let ray = Ray { origin: [0.0; 3], dir: [1.0, 0.0, 0.0] };
+        assert_eq!(bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true), None);
+        assert!(!bvh.any_hit(&ray, 0.0, f64::INFINITY, |_| true));
+    }
+
+    /// All permutations of 0..m.
+    fn permutations(m: usize) -> Vec<Vec<usize>> {
+        if m == 0 {
+            return vec![vec![]];
+        }
+        let mut out = vec![];
+        for p in permutations(m - 1) {
+            for pos in 0..=p.len() {
+                let mut q = p.clone();
+                q.insert(pos, m - 1);
+                out.push(q);
+            }
+        }
+        out
+    }
+
+    /// The boundary of the cube [0, k]^N on the integer grid: each facet cut into k^(N−1) unit
+    /// cubes of (N−1)! Kuhn simplices. Kuhn triangulations of neighbouring cubes and facets
+    /// agree on shared faces, so the mesh is closed and conforming.
+    fn cube_boundary<const N: usize>(k: i64) -> Vec<[[i64; N]; N]> {
+        let perms = permutations(N - 1);
+        let mut out = vec![];
+        for axis in 0..N {
+            for side in [0, k] {
+                let free: Vec<usize> = (0..N).filter(|&a| a != axis).collect();
+                for cell in 0..k.pow(N as u32 - 1) {
+                    let mut base = [0i64; N];
+                    base[axis] = side;
+                    let mut c = cell;
+                    for &a in &free {
+                        base[a] = c % k;
+                        c /= k;
+                    }
+                    for p in &perms {
+                        let mut g = base;
+                        out.push(std::array::from_fn(|j| {
+                            if j > 0 {
+                                g[free[p[j - 1]]] += 1;
+                            }
+                            g
+                        }));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    fn closed_mesh_is_watertight<const N: usize>() {
+        let mut r = rng(3000 + N as u64);
+        let k = if N <= 4 { 2 } else { 1 };
+        let cells = cube_boundary::<N>(k);
+        // Targets: every vertex and every edge midpoint of the mesh (on the integer grid ×2).
+        let mut targets: HashSet<[i64; N]> = HashSet::new();
+        for s in &cells {
+            for a in 0..N {
+                targets.insert(s[a].map(|x| 2 * x));
+                for b in a + 1..N {
+                    targets.insert(std::array::from_fn(|i| s[a][i] + s[b][i]));
+                }
+            }
+        }
+        // Every vertex (all coordinates even) and up to 400 edge midpoints (in 8D a Kuhn
+        // simplex's box is its whole facet, so each ray tests thousands of simplices).
+        let mut targets: Vec<[i64; N]> = targets.into_iter().collect();
+        targets.sort();
+        let (mut targets, mut mids): (Vec<_>, Vec<_>) =
+            targets.into_iter().partition(|g| g.iter().all(|x| x % 2 == 0));
+        for j in 0..mids.len().min(400) {
+            let pick = r.random_range(j..mids.len());
+            mids.swap(j, pick);
+            targets.push(mids[j]);
+        }
+        for shape in 0..2 {
+            // 0: the cube [−1, 1]^N itself (box faces on the mesh, zero direction components);
+            // 1: a random affine image of it.
+            let (m, shift): (Matrix<N>, Vector<N>) = if shape == 0 {
+                (crate::linalg::identity(), [0.0; N])
+            } else {
+                let q = random_rotation::<N>(&mut r);
+                let d: Vector<N> = std::array::from_fn(|_| r.random_range(0.5..2.0));
+                (std::array::from_fn(|i| std::array::from_fn(|j| q[i][j] * d[j])), random_vector(&mut r, 3.0))
+            };
+            let map = |g: &[i64; N], den: f64| -> Vector<N> {
+                let x: Vector<N> = std::array::from_fn(|i| 2.0 * g[i] as f64 / (den * k as f64) - 1.0);
+                add(&mat_vec(&m, &x), &shift)
+            };
+            let simplices: Vec<[[f64; N]; N]> = cells.iter().map(|s| s.map(|v| map(&v, 1.0))).collect();
+            let ids: Vec<u32> = (0..simplices.len() as u32).collect();
+            let bvh = Bvh::from_simplices(&simplices, &ids);
+            assert_eq!(bvh.len(), simplices.len());
+            let center = shift;
+            for g in &targets {
+                let target = map(g, 2.0);
+                // From the inside: the one crossing is at the target, t = 1.
+                let ray = Ray { origin: center, dir: crate::linalg::sub(&target, &center) };
+                let h = bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true);
+                assert!(h.is_some_and(|h| (h.t - 1.0).abs() < 1e-9), "N={N} shape {shape}: from inside to {g:?}: {h:?}");
+                // From outside, along a random direction and (axis-aligned cube) along an axis:
+                // the first crossing is at or before the target.
+                let mut origins = vec![add_scaled(&target, 4.0, &random_unit::<N>(&mut r))];
+                if shape == 0 {
+                    let axis = r.random_range(0..N);
+                    let mut o = target;
+                    o[axis] += if target[axis] >= 0.0 { 3.0 } else { -3.0 };
+                    origins.push(o);
+                }
+                for origin in origins {
+                    let ray = Ray { origin, dir: crate::linalg::sub(&target, &origin) };
+                    let h = bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true);
+                    let ok = h.is_some_and(|h| h.t <= 1.0 + 1e-9);
+                    assert!(ok, "N={N} shape {shape}: outside {origin:?} to {g:?}: {h:?}");
+                    assert!(bvh.any_hit(&ray, 0.0, f64::INFINITY, |_| true));
+                }
+            }
+        }
+    }
+
+    fn random_unit<const N: usize>(r: &mut TestRng) -> Vector<N> {
+        loop {
+            let v = random_vector::<N>(r, 1.0);
+            let l = norm(&v);
+            if l > 0.1 && l <= 1.0 {
+                return scale(&v, 1.0 / l);
+            }
+        }
+    }
+
+    #[test]
+    fn accel_closed_meshes_are_watertight_at_vertices_and_edges() {
+        for_each_dim!(closed_mesh_is_watertight);
+    }
+
+    #[test]
+    fn accel_build_is_deterministic() {
+        fn check<const N: usize>() {
+            let mut r = rng(4000 + N as u64);
+            let s = soup::<N>(&mut r, 3000);
+            let a = build_soup(&s, PAR_MIN);
+            let b = build_soup(&s, PAR_MIN);
+            assert!(a == b, "N={N}: two builds differ");
+            // Maximal forking, and a one-thread pool, give the same tree.
+            let c = build_soup(&s, 2);
+            assert!(a == c, "N={N}: parallel build differs");
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+            let d = pool.install(|| build_soup(&s, 2));
+            assert!(a == d, "N={N}: one-thread build differs");
+            assert!(a.node_count() > 1 && a.memory_bytes() > 0);
+        }
+        for_each_dim!(check);
+    }
+
+    #[test]
+    fn accel_slab_test_treats_boxes_as_closed() {
+        let mut node = Node4::<3> {
+            b: [[[f32::INFINITY; W]; 3], [[f32::NEG_INFINITY; W]; 3]],
+            child: [EMPTY; W],
+        };
+        for i in 0..3 {
+            node.b[0][i][0] = 0.0;
+            node.b[1][i][0] = 1.0;
+        }
+        let hit = |origin: [f64; 3], dir: [f64; 3]| {
+            RayPre::new(&Ray { origin, dir }, 1.0).slab(&node, 0.0, f32::INFINITY).0
+        };
+        // Along a face, along an edge, from a face plane with zero components of both signs.
+        assert_eq!(hit([-1.0, 0.0, 0.5], [1.0, 0.0, 0.0]), 1);
+        assert_eq!(hit([-1.0, 1.0, 1.0], [1.0, 0.0, -0.0]), 1);
+        assert_eq!(hit([0.5, 1.0, 0.5], [0.0, -0.0, 0.0]), 1);
+        // Exactly at a corner, from outside.
+        assert_eq!(hit([-1.0, -2.0, -3.0], [1.0, 2.0, 3.0]), 1);
+        assert_eq!(hit([1.0 + 1.0 / 3.0, 2.0, 3.0], [-1.0 / 3.0, -1.0, -2.0]), 1);
+        // Misses, and the empty slots never hit.
+        assert_eq!(hit([-1.0, 1.5, 0.5], [1.0, 0.0, 0.0]), 0);
+        assert_eq!(hit([-1.0, 0.5, 0.5], [-1.0, 0.0, 0.0]), 0);
+        assert_eq!(hit([0.5, 0.5, 0.5], [0.0, 0.0, 0.0]), 1);
+    }
+}

@@ -1,0 +1,218 @@
+//! The N-D camera and its (N−1)-D retina (course notes, "N-dimensional Imaging").
+//!
+//! The orientation is an orthonormal N×N matrix whose columns are the retina axes
+//! u_1 … u_{N−1} and then the viewing direction. The ray through retina point
+//! (u_1, …, u_{N−1}) has direction `col_N + Σ u_k·col_k` (perspective, from the position) or
+//! direction `col_N` from `position + Σ u_k·col_k` (orthographic).
+//!
+//! Cells are cubes of side s (`2·tan(fov/2)/R_1` at unit distance, or `2·extent/R_1`); cell
+//! (i_1, …, i_{N−1}) is centred at `u_k = (i_k + ½ − R_k/2)·s`, except
+//! `u_2 = (R_2/2 − i_2 − ½)·s` so that image rows go down. Retina arrays are stored in numpy
+//! order `[i_{N−1}, …, i_2, i_1]`: the linear cell index is `i_1 + R_1·(i_2 + R_2·(i_3 + …))`.
+//!
+//! The course's own camera — focal point at `d_N` on the +x_N axis, focal length `f_N`,
+//! looking down −x_N — is `position = d_N·e_N`, `orientation` with columns e_1 … e_{N−1}, −e_N,
+//! and `fov = 2·atan(R_1·pixel / (2·f_N))` for a film of `R_1` cells of size `pixel`.
+
+use crate::accel::Ray;
+use crate::geometry::generalized_cross;
+use crate::linalg::{add_scaled, dot, norm, scale, sub, Matrix, Vector};
+use crate::scene::desc::Projection;
+
+/// A camera ready to generate rays.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera<const N: usize> {
+    /// Focal point (perspective) or centre of the image plane (orthographic).
+    pub position: Vector<N>,
+    /// Orthonormal; columns u_1 … u_{N−1}, then the viewing direction.
+    pub orientation: Matrix<N>,
+    /// Perspective or orthographic.
+    pub projection: Projection,
+    /// Side s of a retina cell (at unit distance for perspective).
+    pub cell: f64,
+    /// Cells along each retina axis, R_1 … R_{N−1}.
+    pub resolution: Vec<usize>,
+}
+
+impl<const N: usize> Camera<N> {
+    /// Column k of the orientation (0-based: u_1 is column 0, the view direction column N−1).
+    #[inline]
+    pub fn axis(&self, k: usize) -> Vector<N> {
+        std::array::from_fn(|r| self.orientation[r][k])
+    }
+
+    /// Number of retina cells.
+    pub fn cell_count(&self) -> usize {
+        self.resolution.iter().product()
+    }
+
+    /// Retina shape in numpy order `[R_{N−1}, …, R_1]`.
+    pub fn numpy_shape(&self) -> Vec<usize> {
+        self.resolution.iter().rev().copied().collect()
+    }
+
+    /// Retina coordinates (u_1 … u_{N−1}) of the point at fractional position `f` inside cell
+    /// `index` (f = ½ in every axis is the centre), written into `u[..N−1]`.
+    #[inline]
+    pub fn retina_point(&self, index: usize, f: &[f64], u: &mut [f64]) {
+        let mut rest = index;
+        for k in 0..N - 1 {
+            let r = self.resolution[k];
+            let i = rest % r;
+            rest /= r;
+            let half = r as f64 / 2.0;
+            u[k] = if k == 1 {
+                (half - i as f64 - f[k]) * self.cell
+            } else {
+                (i as f64 + f[k] - half) * self.cell
+            };
+        }
+    }
+
+    /// The ray through retina point `u` (u_1 … u_{N−1}).
+    #[inline]
+    pub fn ray(&self, u: &[f64]) -> Ray<N> {
+        let view = self.axis(N - 1);
+        let mut offset = [0.0; N];
+        for k in 0..N - 1 {
+            offset = add_scaled(&offset, u[k], &self.axis(k));
+        }
+        match self.projection {
+            Projection::Perspective => {
+                Ray { origin: self.position, dir: std::array::from_fn(|i| view[i] + offset[i]) }
+            }
+            Projection::Orthographic => {
+                Ray { origin: std::array::from_fn(|i| self.position[i] + offset[i]), dir: view }
+            }
+        }
+    }
+
+    /// Depth of a hit at ray parameter t: Euclidean distance from the camera position
+    /// (perspective) or from the image plane along the view direction (orthographic).
+    #[inline]
+    pub fn depth(&self, ray: &Ray<N>, t: f64) -> f64 {
+        match self.projection {
+            Projection::Perspective => t * norm(&ray.dir),
+            Projection::Orthographic => t,
+        }
+    }
+
+    /// The vector from a point toward the eye, used for back-face culling and lighting.
+    #[inline]
+    pub fn toward_eye(&self, x: &Vector<N>) -> Vector<N> {
+        match self.projection {
+            Projection::Perspective => sub(&self.position, x),
+            Projection::Orthographic => scale(&self.axis(N - 1), -1.0),
+        }
+    }
+}
+
+/// The orientation of a `look_at` camera: view = look_at − position; `up` fixes u_2 … u_{N−1}
+/// in order, each orthonormalized against the view direction and the axes before it; u_1
+/// completes the frame so that det[u_1 … u_{N−1}, −view] = +1 (for N = 3: u_1 right, u_2 up,
+/// and the matrix [right, up, view] has determinant −1).
+///
+/// Returns the index of the offending `up` vector (or `None` for a zero view direction) when
+/// the vectors are not independent.
+pub fn look_at_orientation<const N: usize>(
+    position: &Vector<N>,
+    look_at: &Vector<N>,
+    up: &[Vector<N>],
+) -> Result<Matrix<N>, Option<usize>> {
+    let v = sub(look_at, position);
+    let lv = norm(&v);
+    if !(lv > 0.0) {
+        return Err(None);
+    }
+    let view = scale(&v, 1.0 / lv);
+    let mut axes: Vec<Vector<N>> = vec![view];
+    for (k, u) in up.iter().enumerate() {
+        let mut w = *u;
+        for a in &axes {
+            w = add_scaled(&w, -dot(&w, a), a);
+        }
+        let l = norm(&w);
+        if !(l > 1e-9 * norm(u)) || !(l > 0.0) {
+            return Err(Some(k));
+        }
+        axes.push(scale(&w, 1.0 / l));
+    }
+    // u_1 = (−1)^(N−1) · cross(u_2, …, u_{N−1}, −view): moving the cross product from the last
+    // column to the first is a cyclic shift of N columns, of sign (−1)^(N−1).
+    let mut edges: Vec<Vector<N>> = axes[1..].to_vec();
+    edges.push(scale(&view, -1.0));
+    let c = generalized_cross(&edges);
+    let sign = if (N - 1).is_multiple_of(2) { 1.0 } else { -1.0 };
+    let u1 = scale(&c, sign / norm(&c));
+    let mut cols: Vec<Vector<N>> = vec![u1];
+    cols.extend_from_slice(&axes[1..]);
+    cols.push(view);
+    Ok(std::array::from_fn(|r| std::array::from_fn(|c| cols[c][r])))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::{det, mat_mul, transpose};
+    use crate::testutil::*;
+
+    fn look_at_frame<const N: usize>() {
+        let mut r = rng(900 + N as u64);
+        for _ in 0..50 {
+            let p = random_vector::<N>(&mut r, 5.0);
+            let t = random_vector::<N>(&mut r, 5.0);
+            let up: Vec<Vector<N>> = random_points(&mut r, N - 2, 1.0);
+            let o = look_at_orientation(&p, &t, &up).unwrap();
+            // Orthonormal.
+            let g = mat_mul(&transpose(&o), &o);
+            for i in 0..N {
+                for j in 0..N {
+                    assert!((g[i][j] - if i == j { 1.0 } else { 0.0 }).abs() < 1e-12);
+                }
+            }
+            // det[u_1 … u_{N−1}, −view] = +1, i.e. det(O) = −1.
+            assert!((det(&o) + 1.0).abs() < 1e-12, "N={N}: det {}", det(&o));
+            // The last column is the normalized view direction.
+            let v = sub(&t, &p);
+            for i in 0..N {
+                assert!((o[i][N - 1] - v[i] / norm(&v)).abs() < 1e-12);
+            }
+            // u_2 lies in the plane of view and up[0], on up[0]'s side.
+            if N > 2 {
+                let u2: Vector<N> = std::array::from_fn(|i| o[i][1]);
+                assert!(dot(&u2, &up[0]) > 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn look_at_frames_in_every_dimension() {
+        for_each_dim!(look_at_frame);
+    }
+
+    #[test]
+    fn three_d_look_at_is_the_usual_camera() {
+        let o = look_at_orientation(&[0.0, 0.0, 5.0], &[0.0, 0.0, 0.0], &[[0.0, 1.0, 0.0]]).unwrap();
+        // right = +x, up = +y, view = −z.
+        assert_eq!(o, [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]]);
+        assert_eq!(look_at_orientation(&[0.0; 3], &[0.0; 3], &[[0.0, 1.0, 0.0]]), Err(None));
+        assert_eq!(look_at_orientation(&[0.0; 3], &[0.0, 1.0, 0.0], &[[0.0, 2.0, 0.0]]), Err(Some(0)));
+    }
+
+    #[test]
+    fn cells_are_centred_and_rows_go_down() {
+        let cam = Camera::<3> {
+            position: [0.0, 0.0, 0.0],
+            orientation: crate::linalg::identity(),
+            projection: Projection::Orthographic,
+            cell: 0.5,
+            resolution: vec![4, 2],
+        };
+        let mut u = [0.0; 3];
+        cam.retina_point(0, &[0.5, 0.5], &mut u);
+        assert_eq!(&u[..2], &[-0.75, 0.25]); // top-left cell
+        cam.retina_point(7, &[0.5, 0.5], &mut u);
+        assert_eq!(&u[..2], &[0.75, -0.25]); // bottom-right cell
+        assert_eq!(cam.numpy_shape(), vec![2, 4]);
+    }
+}

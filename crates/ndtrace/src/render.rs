@@ -1,0 +1,327 @@
+//! The tracer: rays from the N-D camera through every cell of the (N−1)-D retina, nearest hits
+//! from the BVH, N-D Lambert + Blinn–Phong shading with hard shadows (course notes, "Ray
+//! Tracing" and Part II(B) "4D Shading"), written into a [`Retina`].
+//!
+//! Work is split into fixed chunks of cells traced in parallel with rayon; every cell's result
+//! depends only on the scene, the seed and the cell index, so the retina is bit-identical
+//! whatever the number of threads.
+
+use crate::accel::{Hit, Ray};
+use crate::linalg::{add_scaled, dot, norm, scale, sub, Vector};
+use crate::scene::desc::RenderMode;
+use crate::scene::{Light, Scene};
+use crate::{NdError, NdResult};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// Cells per unit of parallel work (and of progress reporting and cancellation checks).
+pub const CHUNK: usize = 1024;
+
+/// A traced (N−1)-D retina. Arrays are C-ordered in numpy order `[i_{N−1}, …, i_1]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Retina {
+    /// Dimension N of the scene.
+    pub dim: usize,
+    /// Retina shape in numpy order `[R_{N−1}, …, R_1]`.
+    pub shape: Vec<usize>,
+    /// Linear RGBA, premultiplied by alpha (the covered fraction of the cell).
+    pub rgba: Vec<f32>,
+    /// Distance to the nearest hit (see [`crate::camera::Camera::depth`]); inf on a miss.
+    pub depth: Vec<f32>,
+    /// Unit shading normal of the nearest hit (N per cell); zero on a miss.
+    pub normal: Vec<f32>,
+    /// Object index of the nearest hit; −1 on a miss.
+    pub object_id: Vec<i32>,
+    /// Index into that object's simplices; −1 on a miss.
+    pub primitive_id: Vec<i64>,
+}
+
+/// Shared progress of a trace: cells done, and a flag that cancels it.
+#[derive(Debug, Default)]
+pub struct Progress {
+    /// Cells finished so far.
+    pub done: AtomicUsize,
+    /// Set to stop the trace early (it then returns [`NdError::Cancelled`]).
+    pub cancel: AtomicBool,
+}
+
+/// SplitMix64: a small, fast, seedable generator for the sample jitter.
+#[derive(Clone)]
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn new(seed: u64, cell: u64) -> Self {
+        let mut s = SplitMix(seed ^ 0x9e37_79b9_7f4a_7c15u64.wrapping_mul(cell.wrapping_add(1)));
+        s.next();
+        s
+    }
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (((self.next() >> 32) * n as u64) >> 32) as usize
+    }
+}
+
+/// Fractional sample positions inside a cell: the centre for one sample; otherwise stratified
+/// jitter (a Latin hypercube: along every retina axis each of the S strata holds one sample).
+fn sample_offsets(samples: usize, axes: usize, rng: &mut SplitMix, out: &mut Vec<f64>) {
+    out.clear();
+    out.resize(samples * axes, 0.5);
+    if samples == 1 {
+        return;
+    }
+    let mut perm: Vec<usize> = (0..samples).collect();
+    for k in 0..axes {
+        for i in (1..samples).rev() {
+            perm.swap(i, rng.below(i + 1));
+        }
+        for (j, &p) in perm.iter().enumerate() {
+            out[j * axes + k] = (p as f64 + rng.unit()) / samples as f64;
+        }
+    }
+}
+
+/// What a cell records of its nearest hit.
+struct NearestHit<const N: usize> {
+    depth: f64,
+    normal: Vector<N>,
+    object: i32,
+    primitive: i64,
+}
+
+/// Traces every retina cell of `scene` (on the current rayon pool).
+pub fn trace<const N: usize>(scene: &Scene<N>, progress: &Progress) -> NdResult<Retina> {
+    // Back-face culling (course notes): discard a simplex when det[x_1−x_0 … | C − x_0] < 0,
+    // i.e. when its normal points away from the eye. The eye is fixed per trace.
+    if scene.render.cull_backfaces {
+        let culled: Vec<bool> = (0..scene.flat_normals.len())
+            .into_par_iter()
+            .map(|g| {
+                let (o, s) = scene.locate(g as u32);
+                let obj = &scene.objects[o];
+                let x0 = obj.mesh.vertices[obj.mesh.simplices[s][0] as usize];
+                dot(&scene.flat_normals[g], &scene.camera.toward_eye(&x0)) < 0.0
+            })
+            .collect();
+        trace_with(scene, progress, |id| !culled[id as usize])
+    } else {
+        trace_with(scene, progress, |_| true)
+    }
+}
+
+fn trace_with<const N: usize, F>(scene: &Scene<N>, progress: &Progress, accept: F) -> NdResult<Retina>
+where
+    F: Fn(u32) -> bool + Sync,
+{
+    let cam = &scene.camera;
+    let cells = cam.cell_count();
+    let mut rgba = vec![0f32; cells * 4];
+    let mut depth = vec![f32::INFINITY; cells];
+    let mut normal = vec![0f32; cells * N];
+    let mut object_id = vec![-1i32; cells];
+    let mut primitive_id = vec![-1i64; cells];
+    let samples = scene.render.samples as usize;
+    let depth_range = depth_range(scene);
+
+    rgba.par_chunks_mut(CHUNK * 4)
+        .zip(depth.par_chunks_mut(CHUNK))
+        .zip(normal.par_chunks_mut(CHUNK * N))
+        .zip(object_id.par_chunks_mut(CHUNK))
+        .zip(primitive_id.par_chunks_mut(CHUNK))
+        .enumerate()
+        .for_each(|(chunk, ((((rgba, depth), normal), object_id), primitive_id))| {
+            if progress.cancel.load(Ordering::Relaxed) {
+                return;
+            }
+            let mut offsets = Vec::with_capacity(samples * (N - 1));
+            let mut u = [0.0; N];
+            for c in 0..depth.len() {
+                let cell = chunk * CHUNK + c;
+                let mut rng = SplitMix::new(scene.render.seed, cell as u64);
+                sample_offsets(samples, N - 1, &mut rng, &mut offsets);
+                let mut color = [0.0f64; 3];
+                let mut covered = 0usize;
+                let mut nearest: Option<NearestHit<N>> = None;
+                for j in 0..samples {
+                    cam.retina_point(cell, &offsets[j * (N - 1)..(j + 1) * (N - 1)], &mut u);
+                    let ray = cam.ray(&u[..N - 1]);
+                    let Some(hit) = scene.bvh.closest_hit(&ray, 0.0, f64::INFINITY, &accept) else {
+                        continue;
+                    };
+                    covered += 1;
+                    let (obj, local) = scene.locate(hit.prim);
+                    let n = shading_normal(scene, &hit, obj, local, &ray);
+                    let c = match scene.render.mode {
+                        RenderMode::Shaded => shade(scene, &ray, &hit, obj, &n),
+                        RenderMode::Depth => {
+                            let d = cam.depth(&ray, hit.t);
+                            let g = 1.0 - 0.8 * ((d - depth_range.0) / (depth_range.1 - depth_range.0)).clamp(0.0, 1.0);
+                            [g; 3]
+                        }
+                        RenderMode::Normal => {
+                            std::array::from_fn(|k| if k < N { 0.5 + 0.5 * n[k] } else { 0.5 })
+                        }
+                        RenderMode::PrimitiveId => id_color(hit.prim),
+                        RenderMode::Barycentric => {
+                            std::array::from_fn(|k| if k < N { hit.bary[k] } else { 0.0 })
+                        }
+                    };
+                    for k in 0..3 {
+                        color[k] += c[k];
+                    }
+                    let d = cam.depth(&ray, hit.t);
+                    if nearest.as_ref().is_none_or(|h| d < h.depth) {
+                        nearest = Some(NearestHit { depth: d, normal: n, object: obj as i32, primitive: local as i64 });
+                    }
+                }
+                let inv = 1.0 / samples as f64;
+                for k in 0..3 {
+                    rgba[c * 4 + k] = (color[k] * inv) as f32;
+                }
+                rgba[c * 4 + 3] = (covered as f64 * inv) as f32;
+                if let Some(h) = nearest {
+                    depth[c] = h.depth as f32;
+                    for k in 0..N {
+                        normal[c * N + k] = h.normal[k] as f32;
+                    }
+                    object_id[c] = h.object;
+                    primitive_id[c] = h.primitive;
+                }
+            }
+            progress.done.fetch_add(depth.len(), Ordering::Relaxed);
+        });
+    if progress.cancel.load(Ordering::Relaxed) {
+        return Err(NdError::Cancelled);
+    }
+    Ok(Retina { dim: N, shape: cam.numpy_shape(), rgba, depth, normal, object_id, primitive_id })
+}
+
+/// Near and far depth of the scene's bounding sphere, for the `depth` debug mode.
+fn depth_range<const N: usize>(scene: &Scene<N>) -> (f64, f64) {
+    let mut lo = [f64::INFINITY; N];
+    let mut hi = [f64::NEG_INFINITY; N];
+    for o in &scene.objects {
+        for v in &o.mesh.vertices {
+            for k in 0..N {
+                lo[k] = lo[k].min(v[k]);
+                hi[k] = hi[k].max(v[k]);
+            }
+        }
+    }
+    if !lo[0].is_finite() {
+        return (0.0, 1.0);
+    }
+    let centre: Vector<N> = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
+    let radius = 0.5 * norm(&sub(&hi, &lo));
+    let view = scene.camera.axis(N - 1);
+    let d = dot(&sub(&centre, &scene.camera.position), &view);
+    let (near, far) = ((d - radius).max(0.0), d + radius);
+    if far > near { (near, far) } else { (near, near + 1.0) }
+}
+
+/// A distinct, stable colour per global primitive id.
+fn id_color(id: u32) -> [f64; 3] {
+    let mut h = SplitMix(id as u64);
+    let v = h.next();
+    std::array::from_fn(|k| 0.25 + 0.75 * (((v >> (k * 16)) & 0xffff) as f64 / 65535.0))
+}
+
+/// The unit shading normal: flat (eq. 6) or interpolated from vertex normals with the hit's
+/// barycentric coordinates; turned toward the viewer for two-sided lighting.
+fn shading_normal<const N: usize>(scene: &Scene<N>, hit: &Hit<N>, obj: usize, local: usize, ray: &Ray<N>) -> Vector<N> {
+    let flat = scene.flat_normals[hit.prim as usize];
+    let mut n = flat;
+    let o = &scene.objects[obj];
+    if let Some(vn) = &o.vertex_normals {
+        let idx = &o.mesh.simplices[local];
+        let mut s = [0.0; N];
+        for k in 0..N {
+            s = add_scaled(&s, hit.bary[k], &vn[idx[k] as usize]);
+        }
+        let l = norm(&s);
+        if l > 0.0 {
+            n = scale(&s, 1.0 / l);
+        }
+    }
+    if scene.render.two_sided && dot(&flat, &ray.dir) > 0.0 {
+        n = scale(&n, -1.0);
+    }
+    n
+}
+
+/// N-D Lambert + Blinn–Phong with hard shadows (course notes Part II(B)): the intensity of a
+/// light is the dot product of the unit normal with the unit vector toward it, clamped at 0.
+fn shade<const N: usize>(scene: &Scene<N>, ray: &Ray<N>, hit: &Hit<N>, obj: usize, n: &Vector<N>) -> [f64; 3] {
+    let m = &scene.objects[obj].material;
+    let x = add_scaled(&ray.origin, hit.t, &ray.dir);
+    let dl = norm(&ray.dir);
+    let v = scale(&ray.dir, -1.0 / dl);
+    let mut c: [f64; 3] = std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k]);
+    let flat = scene.flat_normals[hit.prim as usize];
+    let eps = 1e-7 * scene.extent;
+    for light in &scene.lights {
+        let (l, dist, color, atten) = match light {
+            Light::Directional { direction, color } => (*direction, f64::INFINITY, color, 1.0),
+            Light::Point { position, color, falloff } => {
+                let d = sub(position, &x);
+                let dist = norm(&d);
+                if !(dist > 0.0) {
+                    continue;
+                }
+                let atten = if *falloff == 0.0 { 1.0 } else { dist.powf(-falloff) };
+                (scale(&d, 1.0 / dist), dist, color, atten)
+            }
+        };
+        let ndl = dot(n, &l);
+        if ndl <= 0.0 {
+            continue;
+        }
+        if scene.render.shadows {
+            // Leave the surface on the light's side of the simplex's hyperplane.
+            let side = if dot(&flat, &l) >= 0.0 { eps } else { -eps };
+            let origin = add_scaled(&x, side, &flat);
+            let sray = Ray { origin, dir: l };
+            if scene.bvh.any_hit(&sray, 0.0, dist - eps, |_| true) {
+                continue;
+            }
+        }
+        let h = {
+            let s = add_scaled(&l, 1.0, &v);
+            let len = norm(&s);
+            if len > 0.0 { scale(&s, 1.0 / len) } else { l }
+        };
+        let spec = if m.specular.iter().any(|&s| s > 0.0) { dot(n, &h).max(0.0).powf(m.shininess) } else { 0.0 };
+        for k in 0..3 {
+            c[k] += atten * color[k] * (m.diffuse[k] * m.color[k] * ndl + m.specular[k] * spec);
+        }
+    }
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn latin_hypercube_offsets_stratify_every_axis() {
+        let mut rng = SplitMix::new(7, 3);
+        let mut out = vec![];
+        sample_offsets(16, 3, &mut rng, &mut out);
+        for k in 0..3 {
+            let mut strata: Vec<usize> = (0..16).map(|j| (out[j * 3 + k] * 16.0) as usize).collect();
+            strata.sort();
+            assert_eq!(strata, (0..16).collect::<Vec<_>>());
+        }
+        sample_offsets(1, 3, &mut rng, &mut out);
+        assert_eq!(out, vec![0.5; 3]);
+    }
+}

@@ -1,0 +1,351 @@
+//! The one scene description: what a TOML file, a Python dict and the Python builder become.
+//!
+//! Every key is documented in `docs/scene-format.md`. These two declarations are equivalent:
+//!
+//! ```toml
+//! dim = 4
+//! [camera]
+//! position = [0, 0, 0, 5]
+//! look_at = [0, 0, 0, 0]
+//! up = [[0, 1, 0, 0], [0, 0, 1, 0]]
+//! fov = 40
+//! resolution = 64
+//! [[objects]]
+//! shape = "hypercube"
+//! material = { color = [0.9, 0.6, 0.2] }
+//! ```
+//!
+//! ```python
+//! ndtrace.load_dict({"dim": 4,
+//!     "camera": {"position": [0, 0, 0, 5], "look_at": [0, 0, 0, 0],
+//!                "up": [[0, 1, 0, 0], [0, 0, 1, 0]], "fov": 40, "resolution": 64},
+//!     "objects": [{"shape": "hypercube", "material": {"color": [0.9, 0.6, 0.2]}}]})
+//! ```
+//!
+//! Deserialization checks the structure (unknown keys are errors); the dimension-dependent
+//! checks (vector lengths, orthonormality, index ranges) happen when the scene is built.
+
+use serde::{Deserialize, Serialize};
+
+/// A whole scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDesc {
+    /// Dimension N of the world, 2..=8.
+    pub dim: usize,
+    /// Colour behind everything (RGB, linear). Misses get alpha 0.
+    #[serde(default = "default_background")]
+    pub background: Vec<f64>,
+    /// Ambient light colour (RGB).
+    #[serde(default = "default_ambient")]
+    pub ambient: Vec<f64>,
+    /// The N-D pinhole (or orthographic) camera.
+    pub camera: CameraDesc,
+    /// Light sources; none means ambient light only.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lights: Vec<LightDesc>,
+    /// Objects: shapes with materials and transforms.
+    #[serde(default)]
+    pub objects: Vec<ObjectDesc>,
+    /// Tracing options.
+    #[serde(default)]
+    pub render: RenderDesc,
+}
+
+fn default_background() -> Vec<f64> {
+    vec![0.0, 0.0, 0.0]
+}
+fn default_ambient() -> Vec<f64> {
+    vec![0.2, 0.2, 0.2]
+}
+
+/// Perspective (pinhole) or orthographic projection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Projection {
+    /// Rays from the camera position through the retina; `fov` sets the cell size.
+    #[default]
+    Perspective,
+    /// Parallel rays along the view direction; `extent` sets the cell size.
+    Orthographic,
+}
+
+/// One resolution for every retina axis, or one per axis R_1 … R_{N−1}.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(untagged, expecting = "expected a positive integer or a list of N−1 positive integers")]
+pub enum Resolution {
+    /// The same number of cells along every retina axis.
+    Uniform(u64),
+    /// R_1 … R_{N−1}.
+    PerAxis(Vec<u64>),
+}
+
+/// `up` as a list of N−2 vectors (or, for N = 3, a single vector).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged, expecting = "expected a list of N−2 vectors of N numbers")]
+pub enum UpDesc {
+    /// The canonical form: a list of vectors.
+    List(Vec<Vec<f64>>),
+    /// A single vector (allowed when N − 2 = 1).
+    Single(Vec<f64>),
+}
+
+/// The camera: position, orientation and projection.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    /// Focal point (perspective) or centre of the image plane (orthographic).
+    pub position: Vec<f64>,
+    /// Point looked at; the view direction is `look_at − position`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub look_at: Option<Vec<f64>>,
+    /// With `look_at`: N−2 vectors fixing the retina axes u_2 … u_{N−1} in order.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub up: Option<UpDesc>,
+    /// Instead of `look_at`: an orthonormal N×N matrix as N rows, whose columns are
+    /// u_1 … u_{N−1} and then the viewing direction.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientation: Option<Vec<Vec<f64>>>,
+    /// `"perspective"` (default) or `"orthographic"`.
+    #[serde(default)]
+    pub projection: Projection,
+    /// Perspective: full angle across u_1, in degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fov: Option<f64>,
+    /// Orthographic: half-width of the retina across u_1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extent: Option<f64>,
+    /// Cells per retina axis.
+    pub resolution: Resolution,
+}
+
+/// A light source.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum LightDesc {
+    /// Light from infinitely far away; `direction` points towards the light.
+    Directional {
+        /// Towards the light (need not be unit length).
+        direction: Vec<f64>,
+        /// RGB colour (intensity).
+        #[serde(default = "default_light_color")]
+        color: Vec<f64>,
+    },
+    /// A point light.
+    Point {
+        /// Position of the light.
+        position: Vec<f64>,
+        /// RGB colour (intensity at distance 1).
+        #[serde(default = "default_light_color")]
+        color: Vec<f64>,
+        /// Intensity falls off as 1/d^falloff (0: none; N−1 is physical in R^N).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        falloff: Option<f64>,
+    },
+}
+
+fn default_light_color() -> Vec<f64> {
+    vec![1.0, 1.0, 1.0]
+}
+
+/// The kinds of shape.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShapeKind {
+    /// Inline `vertices` and `simplices`, or a `.npz` `file` with those arrays.
+    Mesh,
+    /// Boundary of the regular N-simplex (circumradius 1, centred at the origin).
+    Simplex,
+    /// Boundary of [−1, 1]^N, each (N−1)-cube face split into (N−1)! simplices.
+    Hypercube,
+    /// Boundary of the cross-polytope with vertices ±e_i.
+    CrossPolytope,
+    /// The unit sphere S^{N−1}, `subdivisions` levels.
+    Sphere,
+}
+
+impl ShapeKind {
+    /// The names accepted in scene files.
+    pub const NAMES: [&'static str; 5] = ["mesh", "simplex", "hypercube", "cross_polytope", "sphere"];
+}
+
+/// An object: a shape, a material and a transform.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectDesc {
+    /// What to build.
+    pub shape: ShapeKind,
+    /// Mesh: vertex positions (V, N).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertices: Option<Vec<Vec<f64>>>,
+    /// Mesh: vertex indices (S, N) of each (N−1)-simplex.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simplices: Option<Vec<Vec<i64>>>,
+    /// Mesh: a `.npz` file holding `vertices` and `simplices`, relative to the scene file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    /// Sphere: subdivision level (default 2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub subdivisions: Option<u32>,
+    /// Surface appearance.
+    #[serde(default)]
+    pub material: MaterialDesc,
+    /// Transforms applied in order (the first entry acts first).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub transform: Vec<TransformDesc>,
+}
+
+/// A reflection coefficient: one number or an RGB triple.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged, expecting = "expected a number or a list of 3 numbers (RGB)")]
+pub enum Coefficient {
+    /// The same for R, G and B.
+    Scalar(f64),
+    /// Per channel.
+    Rgb(Vec<f64>),
+}
+
+/// Surface appearance (N-D Lambert + Blinn–Phong).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDesc {
+    /// Base colour (RGB, linear).
+    #[serde(default = "default_color")]
+    pub color: Vec<f64>,
+    /// Ambient coefficient (default 1).
+    #[serde(default = "one")]
+    pub ambient: Coefficient,
+    /// Diffuse coefficient (default 1).
+    #[serde(default = "one")]
+    pub diffuse: Coefficient,
+    /// Specular coefficient (default 0).
+    #[serde(default = "zero")]
+    pub specular: Coefficient,
+    /// Blinn–Phong exponent (default 32).
+    #[serde(default = "default_shininess")]
+    pub shininess: f64,
+    /// Per-vertex normals averaged from neighbouring simplices, interpolated barycentrically.
+    #[serde(default)]
+    pub smooth: bool,
+}
+
+fn default_color() -> Vec<f64> {
+    vec![0.7, 0.7, 0.7]
+}
+fn one() -> Coefficient {
+    Coefficient::Scalar(1.0)
+}
+fn zero() -> Coefficient {
+    Coefficient::Scalar(0.0)
+}
+fn default_shininess() -> f64 {
+    32.0
+}
+
+impl Default for MaterialDesc {
+    fn default() -> Self {
+        MaterialDesc {
+            color: default_color(),
+            ambient: one(),
+            diffuse: one(),
+            specular: zero(),
+            shininess: default_shininess(),
+            smooth: false,
+        }
+    }
+}
+
+/// `scale = s` (uniform) or one factor per axis.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged, expecting = "expected a number or a list of N numbers")]
+pub enum ScaleDesc {
+    /// Uniform scale.
+    Uniform(f64),
+    /// One factor per axis.
+    PerAxis(Vec<f64>),
+}
+
+/// A rotation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RotateDesc {
+    /// The course's R_ij turning axis i toward axis j (axes numbered from 0).
+    pub plane: [usize; 2],
+    /// Angle in degrees.
+    pub degrees: f64,
+}
+
+/// One step of an object transform.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+pub enum TransformDesc {
+    /// Scale about the origin.
+    Scale(ScaleDesc),
+    /// Translate by a vector.
+    Translate(Vec<f64>),
+    /// Rotate in a coordinate plane (rotations paper, eq. 6).
+    Rotate(RotateDesc),
+    /// N×N linear or (N+1)×(N+1) affine matrix (rows).
+    Matrix(Vec<Vec<f64>>),
+}
+
+/// What the tracer writes into the retina's colour.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RenderMode {
+    /// Lighting and shadows.
+    #[default]
+    Shaded,
+    /// Grey level from depth (near bright, far dark).
+    Depth,
+    /// The first three normal components mapped from [−1, 1] to [0, 1].
+    Normal,
+    /// A distinct colour per primitive.
+    PrimitiveId,
+    /// The first three barycentric coordinates as RGB.
+    Barycentric,
+}
+
+/// Tracing options.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderDesc {
+    /// Rays per retina cell (stratified jitter when > 1).
+    #[serde(default = "default_samples")]
+    pub samples: u32,
+    /// Seed of the sample jitter.
+    #[serde(default)]
+    pub seed: u64,
+    /// Cast shadow rays toward the lights.
+    #[serde(default = "yes")]
+    pub shadows: bool,
+    /// Discard simplices facing away from the eye.
+    #[serde(default)]
+    pub cull_backfaces: bool,
+    /// Turn normals toward the viewer before lighting.
+    #[serde(default = "yes")]
+    pub two_sided: bool,
+    /// What to render.
+    #[serde(default)]
+    pub mode: RenderMode,
+}
+
+fn default_samples() -> u32 {
+    1
+}
+fn yes() -> bool {
+    true
+}
+
+impl Default for RenderDesc {
+    fn default() -> Self {
+        RenderDesc {
+            samples: 1,
+            seed: 0,
+            shadows: true,
+            cull_backfaces: false,
+            two_sided: true,
+            mode: RenderMode::Shaded,
+        }
+    }
+}

@@ -1,0 +1,228 @@
+//! Scenes: the shared description ([`desc`]), its loaders (TOML here, Python dicts in the
+//! bindings), located errors ([`errors`]) and the build into a traceable [`Scene<N>`].
+
+pub mod build;
+pub mod desc;
+pub mod errors;
+pub mod npz;
+
+pub use build::{Light, Material, Object, Scene};
+pub use desc::SceneDesc;
+pub use errors::PathError;
+
+use crate::{with_dim, NdError, NdResult};
+use errors::{friendly_message, line_col, span_of};
+use std::path::{Path, PathBuf};
+
+/// A scene of any supported dimension: the one place where a runtime `dim` becomes `Scene<N>`.
+pub enum AnyScene {
+    D2(Scene<2>),
+    D3(Scene<3>),
+    D4(Scene<4>),
+    D5(Scene<5>),
+    D6(Scene<6>),
+    D7(Scene<7>),
+    D8(Scene<8>),
+}
+
+/// Runs `$body` with `$s` bound to the `Scene<N>` inside an [`AnyScene`] (and `$N` to N).
+#[macro_export]
+macro_rules! with_scene {
+    ($any:expr, $s:ident, $N:ident => $body:expr) => {{
+        use $crate::scene::AnyScene as A;
+        match $any {
+            A::D2($s) => { const $N: usize = 2; $body }
+            A::D3($s) => { const $N: usize = 3; $body }
+            A::D4($s) => { const $N: usize = 4; $body }
+            A::D5($s) => { const $N: usize = 5; $body }
+            A::D6($s) => { const $N: usize = 6; $body }
+            A::D7($s) => { const $N: usize = 7; $body }
+            A::D8($s) => { const $N: usize = 8; $body }
+        }
+    }};
+}
+
+/// Where a description came from, to locate its errors.
+pub enum Source<'a> {
+    /// A TOML file (name, text).
+    Toml { name: &'a str, text: &'a str },
+    /// Anything without positions (a Python dict); errors are prefixed with this name.
+    Unlocated(&'a str),
+}
+
+/// A scene description together with its source, ready to build.
+pub struct Loaded {
+    /// The description.
+    pub desc: SceneDesc,
+    /// Directory that relative mesh files are resolved against.
+    pub base: Option<PathBuf>,
+}
+
+fn locate(src: &Source<'_>, root: Option<&toml::Spanned<toml::de::DeTable<'_>>>, e: PathError) -> NdError {
+    let location = match (src, root) {
+        (Source::Toml { name, text }, Some(root)) => {
+            let (l, c) = line_col(text, span_of(root, &e.path).start);
+            format!("{name}:{l}:{c}")
+        }
+        (Source::Toml { name, .. }, None) => name.to_string(),
+        (Source::Unlocated(name), _) => name.to_string(),
+    };
+    NdError::Scene { location, path: e.path, message: e.message }
+}
+
+/// Deserializes a description, turning serde errors into [`PathError`]s with field paths.
+pub fn deserialize<'de, D>(de: D) -> Result<SceneDesc, PathError>
+where
+    D: serde::Deserializer<'de>,
+    D::Error: std::fmt::Display,
+{
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let path = if path == "." { String::new() } else { path };
+        let inner = e.into_inner().to_string();
+        // toml's own messages may carry a location block; keep the first line.
+        let msg = inner.lines().find(|l| !l.trim().is_empty() && !l.starts_with("TOML parse error")).unwrap_or(&inner);
+        PathError { message: friendly_message(msg.trim(), &path), path }
+    })
+}
+
+/// Parses TOML text and builds the scene; `name` locates errors (`name:line:col: path: msg`).
+pub fn load_toml_str(text: &str, name: &str, base: Option<&Path>) -> NdResult<(SceneDesc, AnyScene)> {
+    let src = Source::Toml { name, text };
+    let root = toml::de::DeTable::parse(text).map_err(|e| {
+        let (l, c) = line_col(text, e.span().map_or(0, |s| s.start));
+        NdError::Scene { location: format!("{name}:{l}:{c}"), path: String::new(), message: e.message().to_string() }
+    })?;
+    let desc = deserialize(toml::de::Deserializer::from(root.clone())).map_err(|e| locate(&src, Some(&root), e))?;
+    let scene = build_any(&desc, base).map_err(|e| locate(&src, Some(&root), e))?;
+    Ok((desc, scene))
+}
+
+/// Reads a TOML scene file and builds it; mesh files resolve relative to its directory.
+pub fn load_file(path: &Path) -> NdResult<(SceneDesc, AnyScene)> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| NdError::Scene { location: name.clone(), path: String::new(), message: format!("cannot read: {e}") })?;
+    load_toml_str(&text, &name, path.parent())
+}
+
+/// Builds an already deserialized description, locating errors with `name` only.
+pub fn build_desc(desc: &SceneDesc, name: &str, base: Option<&Path>) -> NdResult<AnyScene> {
+    build_any(desc, base).map_err(|e| locate(&Source::Unlocated(name), None, e))
+}
+
+/// Serializes a description as TOML (the inverse of [`load_toml_str`] for the description).
+pub fn to_toml(desc: &SceneDesc) -> NdResult<String> {
+    toml::to_string(desc).map_err(|e| NdError::Value { arg: "scene".into(), message: e.to_string() })
+}
+
+fn build_any(desc: &SceneDesc, base: Option<&Path>) -> Result<AnyScene, PathError> {
+    let built = with_dim!(desc.dim, N => build::build::<N>(desc, base).map(|s| {
+        // One conversion from Scene<N> to the enum, through a helper trait.
+        <Scene<N> as IntoAny>::into_any(s)
+    }));
+    built.map_err(|_| {
+        PathError::new("dim", format!("dimension {} is not supported: dim must be in 2..=8", desc.dim))
+    })?
+}
+
+/// Wraps a `Scene<N>` in the matching [`AnyScene`] variant.
+pub trait IntoAny {
+    /// The wrapped scene.
+    fn into_any(self) -> AnyScene;
+}
+
+macro_rules! into_any {
+    ($($n:literal => $v:ident),*) => {$(
+        impl IntoAny for Scene<$n> {
+            fn into_any(self) -> AnyScene { AnyScene::$v(self) }
+        }
+    )*};
+}
+into_any!(2 => D2, 3 => D3, 4 => D4, 5 => D5, 6 => D6, 7 => D7, 8 => D8);
+
+impl AnyScene {
+    /// The dimension N.
+    pub fn dim(&self) -> usize {
+        with_scene!(self, _s, N => N)
+    }
+    /// Warnings collected while building.
+    pub fn warnings(&self) -> &[String] {
+        with_scene!(self, s, _N => &s.warnings)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CUBE: &str = r#"
+dim = 4
+[camera]
+position = [0, 0, 0, 5]
+look_at = [0, 0, 0, 0]
+up = [[0, 1, 0, 0], [0, 0, 1, 0]]
+fov = 40
+resolution = [8, 6, 4]
+
+[[lights]]
+type = "point"
+position = [1, 2, 3, 4]
+falloff = 3
+
+[[objects]]
+shape = "hypercube"
+material = { color = [1, 0.5, 0.25], specular = [0.1, 0.2, 0.3], smooth = true }
+transform = [{ scale = 0.5 }, { rotate = { plane = [0, 3], degrees = 30 } }, { translate = [0, 0, 0.5, 0] }]
+
+[[objects]]
+shape = "mesh"
+vertices = [[0, 0, 0, 0], [1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]
+simplices = [[0, 1, 2, 3]]
+"#;
+
+    #[test]
+    fn toml_round_trips_through_the_description() {
+        let (desc, scene) = load_toml_str(CUBE, "cube.toml", None).unwrap();
+        assert_eq!(scene.dim(), 4);
+        let text = to_toml(&desc).unwrap();
+        let (again, _) = load_toml_str(&text, "again.toml", None).unwrap();
+        assert_eq!(desc, again);
+        with_scene!(&scene, s, N => {
+            assert_eq!(N, 4);
+            assert_eq!(s.camera.numpy_shape(), vec![4, 6, 8]);
+            assert_eq!(s.bvh.len(), 48 + 1);
+            assert_eq!(s.locate(48), (1, 0));
+            assert_eq!(s.locate(47), (0, 47));
+        });
+    }
+
+    fn err(text: &str) -> String {
+        match load_toml_str(text, "scene.toml", None) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("expected an error for:\n{text}"),
+        }
+    }
+
+    #[test]
+    fn errors_name_file_line_column_and_field() {
+        let bad = CUBE.replace("color = [1, 0.5, 0.25]", "color = [1, 0.5]");
+        let line = bad.lines().position(|l| l.contains("color = [1, 0.5]")).unwrap() + 1;
+        let col = bad.lines().nth(line - 1).unwrap().find("[1, 0.5]").unwrap() + 1;
+        assert_eq!(err(&bad), format!("scene.toml:{line}:{col}: objects[0].material.color: expected 3 numbers, got 2"));
+        let e = err(&CUBE.replace("shape = \"hypercube\"", "shape = \"hypercub\""));
+        assert!(e.contains("objects[0].shape: unknown shape \"hypercub\" (did you mean \"hypercube\"?)"), "{e}");
+        let e = err(&CUBE.replace("falloff = 3", "falof = 3"));
+        assert!(e.contains("lights[0]") && e.contains("did you mean \"falloff\""), "{e}");
+        let e = err(&CUBE.replace("simplices = [[0, 1, 2, 3]]", "simplices = [[0, 1, 2, 4]]"));
+        assert!(e.contains("objects[1].simplices[0][3]: vertex index 4 out of range"), "{e}");
+        let e = err(&CUBE.replace("dim = 4", "dim = 9"));
+        assert!(e.contains("dim") && e.contains("2..=8"), "{e}");
+        let e = err(&CUBE.replace("resolution = [8, 6, 4]", "resolution = [8, 0, 4]"));
+        assert!(e.contains("camera.resolution: axis 2 has zero cells"), "{e}");
+        let e = err(&CUBE.replace("resolution = [8, 6, 4]", "resolution = 100000000"));
+        assert!(e.contains("camera.resolution") && e.contains("iB"), "{e}");
+        let e = err(&CUBE.replace("[[objects]]\nshape = \"mesh\"", "[[objects]]\nshape = \"mesh\"\nx = ]"));
+        assert!(e.starts_with("scene.toml:"), "{e}");
+    }
+}

@@ -1,0 +1,201 @@
+"""Compositing a retina into a 2D picture: ``ndtrace.composite``."""
+
+from __future__ import annotations
+
+import math
+import numbers
+from typing import Sequence
+
+import numpy as np
+
+from . import _ndtrace
+from .retina import Retina
+
+__all__ = ["composite", "MODES", "PROJECTIONS"]
+
+MODES = ("volume", "mip", "first_hit", "slices")
+PROJECTIONS = ("perspective", "orthographic")
+
+
+def _real(name: str, value, *, low: float | None = None, low_open: bool = False,
+          high: float | None = None) -> float:
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{name}: expected a real number, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ValueError(f"{name}: must be finite, got {v}")
+    if low is not None and (v <= low if low_open else v < low):
+        raise ValueError(f"{name}: must be {'>' if low_open else '≥'} {low}, got {v}")
+    if high is not None and v > high:
+        raise ValueError(f"{name}: must be ≤ {high}, got {v}")
+    return v
+
+
+def _int(name: str, value, *, low: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ValueError(f"{name}: expected an integer, got {value!r}")
+    if int(value) < low:
+        raise ValueError(f"{name}: must be at least {low}, got {value}")
+    return int(value)
+
+
+def _array(name: str, value, ndim: int | None = None) -> np.ndarray:
+    a = np.asarray(value)
+    if a.dtype == object or not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)
+                                 or a.dtype == np.bool_):
+        raise ValueError(f"{name}: expected a real numeric array, got dtype {a.dtype}")
+    return np.ascontiguousarray(a, dtype=np.float32)
+
+
+def composite(
+    retina,
+    *,
+    mode: str = "volume",
+    azimuth: float = 30.0,
+    elevation: float = 20.0,
+    distance: float = 4.0,
+    projection: str = "perspective",
+    size: tuple[int, int] | None = (512, 512),
+    opacity: float = 1.0,
+    depth_cue: float = 0.0,
+    axis: int = 0,
+    background: Sequence[float] | None = None,
+    zoom: float = 1.0,
+    step: float = 0.5,
+    stages: Sequence[tuple[float, float]] | None = None,
+    strip_height: int = 32,
+    labels: bool = True,
+    threads: int | None = None,
+) -> np.ndarray:
+    """Composites a retina into a 2D picture: a float32 array ``(H, W, 4)``, linear RGBA, row 0
+    at the top.
+
+    **RGB is the retina composited over the opaque** ``background`` (``C + (1 − A)·bg``, C the
+    accumulated premultiplied colour); **alpha is the opacity A of the retina's content alone**
+    (1 − transmittance). With the default black background, ``(RGB, A)`` is therefore a valid
+    premultiplied image.
+
+    ``retina`` is an :class:`ndtrace.Retina` (its ``rgba`` and ``depth``) or a raw premultiplied
+    rgba array of shape ``(..., 4)`` in numpy order ``[i_{N−1}, …, i_1, channel]`` (then there
+    is no depth, and ``depth_cue`` must stay 0). A scene of dimension N has an (N−1)-D retina:
+
+    * N = 4 — a 3D retina (slices, rows, columns): a 3D camera orbits the retina cube (its
+      longest side spans [−1, 1]; world x = columns, y = up the rows, z = slices). At
+      ``azimuth = elevation = 0`` it looks along the slices (slice 0 nearest) with columns to
+      the right and row 0 on top; positive azimuth swings the eye to the right, positive
+      elevation up.
+    * N ≥ 5 — recursive projection: the retina is composited one leading axis at a time (an
+      emission–absorption projection with its own perspective (f_k, d_k), see ``stages``) down
+      to 3D, then rendered as for N = 4.
+    * N = 3 — the 2D retina is the picture, scaled to fit ``size`` (aspect kept, centred,
+      nearest cell, whole-number enlargement); ``size=None`` gives it at native size.
+    * N = 2 — a strip ``strip_height`` pixels high across the whole width, centred vertically;
+      ``size=None`` gives (R_1, strip_height).
+
+    Keywords (defaults in brackets):
+
+    * ``mode`` ["volume"] — for 3D volumes: ``"volume"`` (front-to-back emission–absorption
+      with trilinear sampling every ``step`` cells; a cell's alpha is its opacity over one cell,
+      so a uniform slab of alpha a, L cells thick, has opacity exactly 1 − (1 − a)^L whatever the
+      step; rays stop once transmittance < 1e-4), ``"mip"`` (maximum intensity projection: the
+      crossed cell of largest luminance, shown unchanged), ``"first_hit"`` (the nearest crossed
+      cell with alpha > 0, opaque in its own colour: crisp cubes and silhouettes) or
+      ``"slices"`` (a near-square montage of the 2D slices along ``axis``, slice k in tile row
+      k // cols and column k % cols, cols = ⌈√count⌉, 1-pixel grey separators, the index in each
+      tile's corner in a built-in 3×5 font when ``labels``).
+    * ``azimuth``, ``elevation`` [30, 20] — degrees.
+    * ``distance`` [4.0] — eye distance in half-diagonals of the retina cube (> 1 for
+      perspective). Perspective uses the field of view in which the cube's bounding sphere just
+      fills the shorter side (tan(fov/2) = 1/√(distance² − 1)), so a larger distance only
+      flattens the perspective; orthographic views span the sphere and ignore it.
+    * ``projection`` ["perspective"] — or ``"orthographic"``; also used by every N ≥ 5 stage.
+    * ``size`` [(512, 512)] — (W, H) pixels; None: native size for N ≤ 3, (512, 512) otherwise.
+    * ``opacity`` [1.0] — multiplies every cell's alpha (and premultiplied colour; alpha clamped
+      to 1) so inner structure shows through; e.g. 0.05 turns a solid traced body translucent.
+    * ``depth_cue`` [0.0] — in [0, 1]: tints each cell by its N-D depth, warm (near) to cool
+      (far), normalized over the retina's depth range. Needs a Retina.
+    * ``axis`` [0] — for ``"slices"``: 0 slices, 1 rows, 2 columns of the 3D volume.
+    * ``background`` [None = black] — opaque linear RGB.
+    * ``zoom`` [1.0] — magnification of the 3D view.
+    * ``step`` [0.5] — sample spacing of ``"volume"`` in cells, 0.01 … 4.
+    * ``stages`` [None] — for N ≥ 5: N − 4 pairs (f_k, d_k), from the stage collapsing the
+      retina's leading axis, (f_{N−1}, d_{N−1}), down to (f_4, d_4). Each stage puts its box
+      (longest axis spanning [−1, 1], collapsed axis ±a_k) with the eye at x_k = −d_k and maps
+      x_j ↦ x_j·f_k/(d_k + x_k). Need f_k > 0, d_k > a_k. Default d_k = 3 and f_k chosen so
+      slice 0 maps one-to-one (farther slices appear smaller).
+    * ``strip_height`` [32] — for N = 2.
+    * ``labels`` [True] — slice numbers in the montage.
+    * ``threads`` [None = every core] — the picture is bit-identical whatever the number.
+
+    Raises ValueError naming the argument on bad input.
+    """
+    if isinstance(retina, Retina):
+        rgba = _array("retina.rgba", retina.rgba)
+        depth = _array("retina.depth", retina.depth)
+    else:
+        if isinstance(retina, (str, bytes)) or retina is None:
+            raise ValueError(f"retina: expected an ndtrace.Retina or an rgba array, got {type(retina).__name__}")
+        rgba = _array("retina", retina)
+        depth = None
+    if rgba.ndim < 2 or rgba.shape[-1] != 4:
+        raise ValueError(f"retina: expected rgba of shape (..., 4) with 1 to 7 retina axes, got {rgba.shape}")
+    if not 1 <= rgba.ndim - 1 <= 7:
+        raise ValueError(f"retina: a retina has 1 to 7 axes (N = 2..8), got shape {rgba.shape}")
+    if depth is not None and depth.shape != rgba.shape[:-1]:
+        raise ValueError(f"retina.depth: expected shape {rgba.shape[:-1]}, got {depth.shape}")
+    if mode not in MODES:
+        raise ValueError(f"mode: expected one of {', '.join(map(repr, MODES))}, got {mode!r}")
+    if projection not in PROJECTIONS:
+        raise ValueError(f"projection: expected 'perspective' or 'orthographic', got {projection!r}")
+    azimuth = _real("azimuth", azimuth)
+    elevation = _real("elevation", elevation)
+    if projection == "perspective":
+        distance = _real("distance", distance, low=1.0, low_open=True)
+    else:
+        distance = _real("distance", distance, low=0.0, low_open=True)
+    opacity = _real("opacity", opacity, low=0.0)
+    depth_cue = _real("depth_cue", depth_cue, low=0.0, high=1.0)
+    if depth_cue > 0 and depth is None:
+        raise ValueError("depth_cue: needs depth, i.e. an ndtrace.Retina (a raw rgba array has none)")
+    zoom = _real("zoom", zoom, low=0.0, low_open=True)
+    step = _real("step", step, low=0.01, high=4.0)
+    axis = _int("axis", axis, low=0)
+    if mode == "slices" and rgba.ndim - 1 >= 3 and axis > 2:
+        raise ValueError(f"axis: must be 0, 1 or 2 (an axis of the 3D volume), got {axis}")
+    strip_height = _int("strip_height", strip_height, low=1)
+    shape = rgba.shape[:-1]
+    if size is None:
+        if len(shape) == 2:
+            size = (shape[1], shape[0])
+        elif len(shape) == 1:
+            size = (shape[0], strip_height)
+        else:
+            size = (512, 512)
+    try:
+        w, h = size
+    except (TypeError, ValueError):
+        raise ValueError(f"size: expected (width, height), got {size!r}") from None
+    size = (_int("size[0] (width)", w, low=1), _int("size[1] (height)", h, low=1))
+    if background is None:
+        bg = (0.0, 0.0, 0.0)
+    else:
+        b = np.asarray(background)
+        if b.shape != (3,):
+            raise ValueError(f"background: expected 3 numbers (linear RGB), got shape {b.shape}")
+        bg = tuple(_real(f"background[{k}]", v.item()) for k, v in enumerate(b))
+    if stages is not None:
+        st = np.asarray(stages, dtype=float) if len(stages) else np.zeros((0, 2))
+        if st.ndim != 2 or st.shape[1] != 2:
+            raise ValueError(f"stages: expected a sequence of (f, d) pairs, got shape {st.shape}")
+        if not np.all(np.isfinite(st)):
+            raise ValueError("stages: values must be finite")
+        stages = [(float(f), float(d)) for f, d in st]
+    if threads is not None:
+        threads = _int("threads", threads, low=1)
+    out = _ndtrace.composite(
+        rgba, depth, mode=mode, azimuth=azimuth, elevation=elevation, distance=distance,
+        zoom=zoom, projection=projection, size=size, opacity=opacity, step=step,
+        depth_cue=depth_cue, axis=axis, background=bg, stages=stages,
+        strip_height=strip_height, labels=bool(labels), threads=threads,
+    )
+    return out

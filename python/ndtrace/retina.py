@@ -1,0 +1,65 @@
+"""Retinas: the (N−1)-dimensional images an N-D camera records, and ``trace``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .scene import Scene
+
+__all__ = ["Retina", "trace"]
+
+
+@dataclass(frozen=True, eq=False)
+class Retina:
+    """A traced retina. Arrays are indexed ``[i_{N−1}, …, i_2, i_1]`` (a 3D retina is
+    (slices, rows, columns)):
+
+    * ``rgba`` (…, 4) float32: linear colour premultiplied by alpha, the covered fraction;
+    * ``depth`` float32: distance from the camera position (perspective) or the image plane
+      (orthographic) to the nearest hit, inf on a miss;
+    * ``normal`` (…, N) float32: unit shading normal of the nearest hit, 0 on a miss;
+    * ``object_id`` int32: index into the scene's objects, −1 on a miss;
+    * ``primitive_id`` int64: index into that object's simplices, −1 on a miss.
+    """
+
+    dim: int
+    rgba: np.ndarray
+    depth: np.ndarray
+    normal: np.ndarray
+    object_id: np.ndarray
+    primitive_id: np.ndarray
+    camera: str | None = None
+    """The scene's ``[camera]`` section as TOML (stored in retina files)."""
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Retina shape (numpy order)."""
+        return self.depth.shape
+
+    @property
+    def hit(self) -> np.ndarray:
+        """Boolean mask of cells whose nearest sample hit something."""
+        return self.object_id >= 0
+
+
+def trace(
+    scene: Scene,
+    threads: int | None = None,
+    progress: Callable[[int, int], object] | None = None,
+) -> Retina:
+    """Traces ``scene`` onto its retina with ``threads`` threads (None: every core).
+
+    ``progress(done, total)`` is called about ten times a second with the number of cells
+    traced. Ctrl-C cancels within a fraction of a second (KeyboardInterrupt). The result is
+    bit-identical whatever the thread count.
+    """
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene: expected an ndtrace.Scene, got {type(scene).__name__}")
+    if threads is not None and (not isinstance(threads, int) or threads < 1):
+        raise ValueError(f"threads: expected a positive integer or None, got {threads!r}")
+    compiled = scene.compiled()
+    out = compiled.trace(threads, progress)
+    return Retina(**out, camera=compiled.camera_toml())

@@ -1,0 +1,186 @@
+"""Scenes: one description shared by TOML files, Python dicts and the builder API.
+
+These three produce the same scene::
+
+    ndtrace.load_file("scenes/tesseract.toml")
+
+    ndtrace.load_dict({"dim": 4, "camera": {...}, "objects": [{"shape": "hypercube"}]})
+
+    (ndtrace.Scene(4)
+        .set_camera(position=[0, 0, 0, 5], look_at=[0, 0, 0, 0],
+                    up=[[0, 1, 0, 0], [0, 0, 1, 0]], fov=40, resolution=64)
+        .add_object("hypercube"))
+
+Every key is documented in ``docs/scene-format.md``. A scene is validated completely when it
+is built (on loading, or on first use after the builder changed it); errors are ValueErrors
+naming the source, line and column (for files) and the field path, e.g.
+``scene.toml:14:10: objects[2].material.color: expected 3 numbers, got 2``.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import warnings
+from typing import Any, Callable, Iterable
+
+import numpy as np
+
+from . import _ndtrace
+
+__all__ = ["Scene", "load_file", "load_dict", "load_toml"]
+
+
+def _plain(value: Any) -> Any:
+    """Nested numpy arrays and scalars → lists and Python numbers (for the Rust loader)."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _warn(compiled: _ndtrace.CompiledScene) -> None:
+    for message in compiled.warnings:
+        warnings.warn(message, stacklevel=3)
+
+
+class Scene:
+    """An N-dimensional scene: build it with the methods below, or load it with
+    :func:`load_file` / :func:`load_dict`. The BVH is built once and reused by every trace
+    until the scene is changed."""
+
+    def __init__(self, dim: int, *, background=None, ambient=None) -> None:
+        self._data: dict[str, Any] = {"dim": dim, "objects": []}
+        if background is not None:
+            self._data["background"] = _plain(background)
+        if ambient is not None:
+            self._data["ambient"] = _plain(ambient)
+        self._base: str | None = None
+        self._compiled: _ndtrace.CompiledScene | None = None
+
+    # -- construction -------------------------------------------------------------------
+    @classmethod
+    def _from_compiled(cls, compiled: _ndtrace.CompiledScene, base: str | None) -> "Scene":
+        self = cls.__new__(cls)
+        _warn(compiled)
+        self._data = compiled.to_dict()
+        self._base = base
+        self._compiled = compiled
+        return self
+
+    def _changed(self) -> "Scene":
+        self._compiled = None
+        return self
+
+    def set_camera(
+        self,
+        position,
+        *,
+        look_at=None,
+        up=None,
+        orientation=None,
+        projection: str = "perspective",
+        fov: float | None = None,
+        extent: float | None = None,
+        resolution,
+    ) -> "Scene":
+        """Sets the camera (see ``docs/scene-format.md``, ``[camera]``)."""
+        cam: dict[str, Any] = {"position": _plain(position), "projection": projection,
+                               "resolution": _plain(resolution)}
+        for key, value in (("look_at", look_at), ("up", up), ("orientation", orientation),
+                           ("fov", fov), ("extent", extent)):
+            if value is not None:
+                cam[key] = _plain(value)
+        self._data["camera"] = cam
+        return self._changed()
+
+    def add_light(self, type: str, **keys) -> "Scene":
+        """Adds a light: ``add_light("directional", direction=[...], color=[...])`` or
+        ``add_light("point", position=[...], color=[...], falloff=...)``."""
+        self._data.setdefault("lights", []).append({"type": type, **_plain(keys)})
+        return self._changed()
+
+    def add_object(self, shape: str, *, material: dict | None = None,
+                   transform: Iterable[dict] | None = None, **shape_keys) -> "Scene":
+        """Adds an object: a generated shape (``"simplex"``, ``"hypercube"``,
+        ``"cross_polytope"``, ``"sphere"`` with ``subdivisions``) or ``"mesh"`` with
+        ``vertices`` (V, N) and ``simplices`` (S, N), or a ``file``."""
+        obj: dict[str, Any] = {"shape": shape, **_plain(shape_keys)}
+        if material is not None:
+            obj["material"] = _plain(material)
+        if transform is not None:
+            obj["transform"] = _plain(list(transform))
+        self._data["objects"].append(obj)
+        return self._changed()
+
+    def set_render(self, **options) -> "Scene":
+        """Sets ``[render]`` options: samples, seed, shadows, cull_backfaces, two_sided, mode."""
+        self._data.setdefault("render", {}).update(_plain(options))
+        return self._changed()
+
+    # -- the built scene ----------------------------------------------------------------
+    def compiled(self) -> _ndtrace.CompiledScene:
+        """The validated, built scene (raises ValueError on a bad description)."""
+        if self._compiled is None:
+            self._compiled = _ndtrace.load_dict(_plain(self._data), "<scene>", self._base)
+            _warn(self._compiled)
+        return self._compiled
+
+    @property
+    def dim(self) -> int:
+        return int(self._data["dim"])
+
+    @property
+    def warnings(self) -> list[str]:
+        return list(self.compiled().warnings)
+
+    @property
+    def retina_shape(self) -> tuple[int, ...]:
+        return tuple(self.compiled().retina_shape)
+
+    def to_dict(self) -> dict:
+        """The full description with every default filled in."""
+        return self.compiled().to_dict()
+
+    def to_toml(self) -> str:
+        """The description as TOML; ``load_toml(scene.to_toml())`` gives an equal scene."""
+        return self.compiled().to_toml()
+
+    def copy(self) -> "Scene":
+        other = Scene.__new__(Scene)
+        other._data = copy.deepcopy(self._data)
+        other._base = self._base
+        other._compiled = self._compiled
+        return other
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Scene):
+            return NotImplemented
+        return self.compiled().same_description(other.compiled())
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return f"<ndtrace.Scene dim={self.dim} objects={len(self._data.get('objects', []))}>"
+
+
+def load_file(path: str | os.PathLike) -> Scene:
+    """Loads a TOML scene file; mesh ``file`` paths are relative to its folder."""
+    path = os.fspath(path)
+    return Scene._from_compiled(_ndtrace.load_file(path), os.path.dirname(os.path.abspath(path)))
+
+
+def load_toml(text: str, *, name: str = "<string>", base: str | None = None) -> Scene:
+    """Loads a scene from TOML text (``name`` appears in error messages)."""
+    return Scene._from_compiled(_ndtrace.load_toml(text, name, base), base)
+
+
+def load_dict(data: dict, *, base: str | None = None) -> Scene:
+    """Loads a scene from a dict shaped like the TOML format; arrays may be numpy arrays.
+    Relative mesh files resolve against ``base`` (default: the current directory)."""
+    return Scene._from_compiled(_ndtrace.load_dict(_plain(data), "<dict>", base), base)
