@@ -15,6 +15,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
+
+# numpy's OpenBLAS threads busy-wait after a BLAS call and would steal the cores the tracer is
+# being measured on; the scenes are generated with single-threaded BLAS.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import resource
 import subprocess
 import sys

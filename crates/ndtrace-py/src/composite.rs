@@ -53,7 +53,9 @@ fn composite<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let dims = rgba.shape().to_vec();
     if dims.len() < 2 || dims[dims.len() - 1] != 4 {
-        return Err(PyValueError::new_err(format!("retina: expected an rgba array of shape (..., 4), got {dims:?}")));
+        return Err(PyValueError::new_err(format!(
+            "retina: expected an rgba array of shape (..., 4), got {dims:?}"
+        )));
     }
     let shape = dims[..dims.len() - 1].to_vec();
     let rgba = rgba
@@ -67,7 +69,9 @@ fn composite<'py>(
                     d.shape()
                 )));
             }
-            Some(d.as_slice().map_err(|_| PyValueError::new_err("depth: expected a C-contiguous float32 array"))?)
+            Some(d.as_slice().map_err(|_| {
+                PyValueError::new_err("depth: expected a C-contiguous float32 array")
+            })?)
         }
         None => None,
     };
@@ -89,12 +93,18 @@ fn composite<'py>(
         labels,
     };
     let pool = match threads {
-        Some(0) => return Err(PyValueError::new_err("threads: must be at least 1 (or None for every core)")),
+        Some(0) => {
+            return Err(PyValueError::new_err(
+                "threads: must be at least 1 (or None for every core)",
+            ))
+        }
         Some(k) => Some(
             rayon::ThreadPoolBuilder::new()
                 .num_threads(k)
                 .build()
-                .map_err(|e| PyValueError::new_err(format!("threads: cannot start {k} threads: {e}")))?,
+                .map_err(|e| {
+                    PyValueError::new_err(format!("threads: cannot start {k} threads: {e}"))
+                })?,
         ),
         None => None,
     };
@@ -105,7 +115,9 @@ fn composite<'py>(
             None => run(),
         })
         .map_err(to_py_err)?;
-    Ok(PyArray1::from_vec(py, image.rgba).reshape([image.height, image.width, 4])?.into_any())
+    Ok(PyArray1::from_vec(py, image.rgba)
+        .reshape([image.height, image.width, 4])?
+        .into_any())
 }
 
 /// Adds `composite`.

@@ -40,13 +40,19 @@ fn write_retina_exr(
         object_id: vec_of(&object_id, "object_id")?,
         primitive_id: vec_of(&primitive_id, "primitive_id")?,
     };
-    py.detach(|| files::write_retina_exr(&path, &r, camera.as_deref())).map_err(to_py_err)
+    py.detach(|| files::write_retina_exr(&path, &r, camera.as_deref()))
+        .map_err(to_py_err)
 }
 
-fn picture(rgba: &PyReadonlyArrayDyn<'_, f32>, depth: Option<&PyReadonlyArrayDyn<'_, f32>>) -> PyResult<Picture> {
+fn picture(
+    rgba: &PyReadonlyArrayDyn<'_, f32>,
+    depth: Option<&PyReadonlyArrayDyn<'_, f32>>,
+) -> PyResult<Picture> {
     let shape = rgba.shape().to_vec();
     if shape.len() != 3 || shape[2] != 4 {
-        return Err(PyValueError::new_err(format!("image: expected shape (H, W, 4), got {shape:?}")));
+        return Err(PyValueError::new_err(format!(
+            "image: expected shape (H, W, 4), got {shape:?}"
+        )));
     }
     Ok(Picture {
         width: shape[1],
@@ -59,9 +65,15 @@ fn picture(rgba: &PyReadonlyArrayDyn<'_, f32>, depth: Option<&PyReadonlyArrayDyn
 /// Writes a 2D picture (H, W, 4) float32, premultiplied, with optional depth (H, W).
 #[pyfunction]
 #[pyo3(signature = (path, rgba, depth=None))]
-fn write_picture_exr(py: Python<'_>, path: PathBuf, rgba: PyReadonlyArrayDyn<'_, f32>, depth: Option<PyReadonlyArrayDyn<'_, f32>>) -> PyResult<()> {
+fn write_picture_exr(
+    py: Python<'_>,
+    path: PathBuf,
+    rgba: PyReadonlyArrayDyn<'_, f32>,
+    depth: Option<PyReadonlyArrayDyn<'_, f32>>,
+) -> PyResult<()> {
     let p = picture(&rgba, depth.as_ref())?;
-    py.detach(|| files::write_picture_exr(&path, &p)).map_err(to_py_err)
+    py.detach(|| files::write_picture_exr(&path, &p))
+        .map_err(to_py_err)
 }
 
 /// Writes a 2D picture (H, W, 4) float32, premultiplied linear, as 8-bit sRGB PNG.
@@ -92,15 +104,30 @@ fn read_exr(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict>> {
             d.set_item("dim", r.dim)?;
             d.set_item("rgba", PyArray1::from_vec(py, r.rgba).reshape(with(4))?)?;
             d.set_item("depth", PyArray1::from_vec(py, r.depth).reshape(with(0))?)?;
-            d.set_item("normal", PyArray1::from_vec(py, r.normal).reshape(with(r.dim))?)?;
-            d.set_item("object_id", PyArray1::from_vec(py, r.object_id).reshape(with(0))?)?;
-            d.set_item("primitive_id", PyArray1::from_vec(py, r.primitive_id).reshape(with(0))?)?;
+            d.set_item(
+                "normal",
+                PyArray1::from_vec(py, r.normal).reshape(with(r.dim))?,
+            )?;
+            d.set_item(
+                "object_id",
+                PyArray1::from_vec(py, r.object_id).reshape(with(0))?,
+            )?;
+            d.set_item(
+                "primitive_id",
+                PyArray1::from_vec(py, r.primitive_id).reshape(with(0))?,
+            )?;
         }
         ExrContents::Picture(p) => {
             d.set_item("kind", "picture")?;
-            d.set_item("rgba", PyArray1::from_vec(py, p.rgba).reshape(vec![p.height, p.width, 4])?)?;
+            d.set_item(
+                "rgba",
+                PyArray1::from_vec(py, p.rgba).reshape(vec![p.height, p.width, 4])?,
+            )?;
             if let Some(z) = p.depth {
-                d.set_item("depth", PyArray1::from_vec(py, z).reshape(vec![p.height, p.width])?)?;
+                d.set_item(
+                    "depth",
+                    PyArray1::from_vec(py, z).reshape(vec![p.height, p.width])?,
+                )?;
             }
         }
     }

@@ -12,8 +12,9 @@ type Arr<'py> = PyReadonlyArrayDyn<'py, f64>;
 type Out<'py> = PyResult<Bound<'py, PyArray1<f64>>>;
 
 fn flat<'a>(a: &'a Arr<'_>, name: &str) -> PyResult<&'a [f64]> {
-    a.as_slice()
-        .map_err(|_| PyValueError::new_err(format!("{name}: expected a C-contiguous float64 array")))
+    a.as_slice().map_err(|_| {
+        PyValueError::new_err(format!("{name}: expected a C-contiguous float64 array"))
+    })
 }
 
 fn on_degenerate(raise: bool) -> OnDegenerate {
@@ -47,15 +48,29 @@ fn signed_volume<'py>(py: Python<'py>, dim: usize, batch: usize, points: Arr<'py
 }
 
 #[pyfunction]
-fn gram_volume<'py>(py: Python<'py>, dim: usize, k: usize, batch: usize, points: Arr<'py>) -> Out<'py> {
+fn gram_volume<'py>(
+    py: Python<'py>,
+    dim: usize,
+    k: usize,
+    batch: usize,
+    points: Arr<'py>,
+) -> Out<'py> {
     let p = flat(&points, "points")?;
     run(py, batch, |o| batch::gram_volume(dim, k, p, o))
 }
 
 #[pyfunction]
-fn hyperplane<'py>(py: Python<'py>, dim: usize, batch: usize, points: Arr<'py>, raise_degenerate: bool) -> Out<'py> {
+fn hyperplane<'py>(
+    py: Python<'py>,
+    dim: usize,
+    batch: usize,
+    points: Arr<'py>,
+    raise_degenerate: bool,
+) -> Out<'py> {
     let p = flat(&points, "points")?;
-    run(py, batch * (dim + 1), |o| batch::hyperplane(dim, p, o, on_degenerate(raise_degenerate)))
+    run(py, batch * (dim + 1), |o| {
+        batch::hyperplane(dim, p, o, on_degenerate(raise_degenerate))
+    })
 }
 
 #[pyfunction]
@@ -84,7 +99,9 @@ fn barycentric<'py>(
     raise_degenerate: bool,
 ) -> Out<'py> {
     let (x, p) = (flat(&x, "x")?, flat(&points, "points")?);
-    run(py, batch * (k + 1), |o| batch::barycentric(dim, k, x, p, o, on_degenerate(raise_degenerate)))
+    run(py, batch * (k + 1), |o| {
+        batch::barycentric(dim, k, x, p, o, on_degenerate(raise_degenerate))
+    })
 }
 
 #[pyfunction]
@@ -105,7 +122,9 @@ fn clip_segment<'py>(
     raise_degenerate: bool,
 ) -> Out<'py> {
     let (a, b, p) = (flat(&a, "a")?, flat(&b, "b")?, flat(&points, "points")?);
-    run(py, batch, |o| batch::clip_segment(dim, a, b, p, o, on_degenerate(raise_degenerate)))
+    run(py, batch, |o| {
+        batch::clip_segment(dim, a, b, p, o, on_degenerate(raise_degenerate))
+    })
 }
 
 #[pyfunction]
@@ -119,12 +138,24 @@ fn ray_hyperplane<'py>(
     points: Arr<'py>,
     raise_degenerate: bool,
 ) -> Out<'py> {
-    let (c, d, p) = (flat(&origin, "origin")?, flat(&direction, "direction")?, flat(&points, "points")?);
-    run(py, batch, |o| batch::ray_hyperplane(dim, c, d, p, o, on_degenerate(raise_degenerate)))
+    let (c, d, p) = (
+        flat(&origin, "origin")?,
+        flat(&direction, "direction")?,
+        flat(&points, "points")?,
+    );
+    run(py, batch, |o| {
+        batch::ray_hyperplane(dim, c, d, p, o, on_degenerate(raise_degenerate))
+    })
 }
 
 #[pyfunction]
-fn transform_normal<'py>(py: Python<'py>, dim: usize, batch: usize, matrix: Arr<'py>, normal: Arr<'py>) -> Out<'py> {
+fn transform_normal<'py>(
+    py: Python<'py>,
+    dim: usize,
+    batch: usize,
+    matrix: Arr<'py>,
+    normal: Arr<'py>,
+) -> Out<'py> {
     let (m, n) = (flat(&matrix, "matrix")?, flat(&normal, "normal")?);
     run(py, batch * dim, |o| batch::transform_normal(dim, m, n, o))
 }

@@ -54,12 +54,14 @@ impl CompiledScene {
 
     /// The camera section of the description as TOML (stored in retina files).
     fn camera_toml(&self) -> PyResult<String> {
-        scene::to_toml(&self.desc).map(|t| {
-            let start = t.find("[camera]").unwrap_or(0);
-            let rest = &t[start..];
-            let end = rest[1..].find("\n[").map_or(rest.len(), |e| e + 2);
-            rest[..end].trim_end().to_string()
-        }).map_err(to_py_err)
+        scene::to_toml(&self.desc)
+            .map(|t| {
+                let start = t.find("[camera]").unwrap_or(0);
+                let rest = &t[start..];
+                let end = rest[1..].find("\n[").map_or(rest.len(), |e| e + 2);
+                rest[..end].trim_end().to_string()
+            })
+            .map_err(to_py_err)
     }
 
     /// The description as TOML.
@@ -81,16 +83,25 @@ impl CompiledScene {
     /// about ten times a second; Ctrl-C (or an exception in the callback) cancels within a
     /// fraction of a second. Returns a dict of numpy arrays.
     #[pyo3(signature = (threads=None, callback=None))]
-    fn trace<'py>(&self, py: Python<'py>, threads: Option<usize>, callback: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyDict>> {
+    fn trace<'py>(
+        &self,
+        py: Python<'py>,
+        threads: Option<usize>,
+        callback: Option<Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
         if threads == Some(0) {
-            return Err(PyValueError::new_err("threads: must be at least 1 (or None for every core)"));
+            return Err(PyValueError::new_err(
+                "threads: must be at least 1 (or None for every core)",
+            ));
         }
         let pool = match threads {
             Some(k) => Some(
                 rayon::ThreadPoolBuilder::new()
                     .num_threads(k)
                     .build()
-                    .map_err(|e| PyValueError::new_err(format!("threads: cannot start {k} threads: {e}")))?,
+                    .map_err(|e| {
+                        PyValueError::new_err(format!("threads: cannot start {k} threads: {e}"))
+                    })?,
             ),
             None => None,
         };
@@ -111,13 +122,17 @@ impl CompiledScene {
             });
             // Wake at once when the trace ends, else every 50 ms for Ctrl-C and progress.
             let done_rx = std::sync::Mutex::new(done_rx);
-            let wait = || done_rx.lock().map_or(Ok(()), |rx| rx.recv_timeout(Duration::from_millis(50)));
-            while py.detach(wait)
-                == Err(std::sync::mpsc::RecvTimeoutError::Timeout)
-            {
+            let wait = || {
+                done_rx
+                    .lock()
+                    .map_or(Ok(()), |rx| rx.recv_timeout(Duration::from_millis(50)))
+            };
+            while py.detach(wait) == Err(std::sync::mpsc::RecvTimeoutError::Timeout) {
                 if interrupt.is_none() {
                     let polled = py.check_signals().and_then(|_| match &callback {
-                        Some(cb) => cb.call1((progress.done.load(Ordering::Relaxed), total)).map(|_| ()),
+                        Some(cb) => cb
+                            .call1((progress.done.load(Ordering::Relaxed), total))
+                            .map(|_| ()),
                         None => Ok(()),
                     });
                     if let Err(e) = polled {
@@ -152,9 +167,18 @@ fn retina_dict(py: Python<'_>, r: Retina) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("dim", r.dim)?;
     d.set_item("rgba", PyArray1::from_vec(py, r.rgba).reshape(with(4))?)?;
     d.set_item("depth", PyArray1::from_vec(py, r.depth).reshape(with(0))?)?;
-    d.set_item("normal", PyArray1::from_vec(py, r.normal).reshape(with(r.dim))?)?;
-    d.set_item("object_id", PyArray1::from_vec(py, r.object_id).reshape(with(0))?)?;
-    d.set_item("primitive_id", PyArray1::from_vec(py, r.primitive_id).reshape(with(0))?)?;
+    d.set_item(
+        "normal",
+        PyArray1::from_vec(py, r.normal).reshape(with(r.dim))?,
+    )?;
+    d.set_item(
+        "object_id",
+        PyArray1::from_vec(py, r.object_id).reshape(with(0))?,
+    )?;
+    d.set_item(
+        "primitive_id",
+        PyArray1::from_vec(py, r.primitive_id).reshape(with(0))?,
+    )?;
     Ok(d)
 }
 
@@ -168,8 +192,15 @@ fn load_file(py: Python<'_>, path: PathBuf) -> PyResult<CompiledScene> {
 /// Parses TOML text (named `name` in errors) and builds it; relative files resolve against `base`.
 #[pyfunction]
 #[pyo3(signature = (text, name="<string>", base=None))]
-fn load_toml(py: Python<'_>, text: &str, name: &str, base: Option<PathBuf>) -> PyResult<CompiledScene> {
-    let (desc, scene) = py.detach(|| scene::load_toml_str(text, name, base.as_deref())).map_err(to_py_err)?;
+fn load_toml(
+    py: Python<'_>,
+    text: &str,
+    name: &str,
+    base: Option<PathBuf>,
+) -> PyResult<CompiledScene> {
+    let (desc, scene) = py
+        .detach(|| scene::load_toml_str(text, name, base.as_deref()))
+        .map_err(to_py_err)?;
     Ok(CompiledScene { desc, scene })
 }
 
@@ -177,12 +208,23 @@ fn load_toml(py: Python<'_>, text: &str, name: &str, base: Option<PathBuf>) -> P
 /// `name`; relative files resolve against `base`.
 #[pyfunction]
 #[pyo3(signature = (data, name="<dict>", base=None))]
-fn load_dict(py: Python<'_>, data: &Bound<'_, PyAny>, name: &str, base: Option<PathBuf>) -> PyResult<CompiledScene> {
+fn load_dict(
+    py: Python<'_>,
+    data: &Bound<'_, PyAny>,
+    name: &str,
+    base: Option<PathBuf>,
+) -> PyResult<CompiledScene> {
     let mut de = pythonize::Depythonizer::from_object(data);
     let desc = scene::deserialize(&mut de).map_err(|e| {
-        to_py_err(NdError::Scene { location: name.to_string(), path: e.path, message: e.message })
+        to_py_err(NdError::Scene {
+            location: name.to_string(),
+            path: e.path,
+            message: e.message,
+        })
     })?;
-    let scene = py.detach(|| scene::build_desc(&desc, name, base.as_deref())).map_err(to_py_err)?;
+    let scene = py
+        .detach(|| scene::build_desc(&desc, name, base.as_deref()))
+        .map_err(to_py_err)?;
     Ok(CompiledScene { desc, scene })
 }
 

@@ -8,9 +8,13 @@
 //! without any per-ray solve, in O(N²):
 //!
 //! * `t = n̂·(x_0 − C) / n̂·d`;
-//! * `t_k = r_k·(X(t) − x_0) = r_k·(C − x_0) + t·(r_k·d)` for k = 1 … N−1, `t_0 = 1 − Σ t_k`
-//!   (evaluated as `r_k·q` with `q = t·d − (x_0 − C)`, one dot product per row);
+//! * `t_k = r_k·(X(t) − x_0) = r_k·(C − x_0) + t·(r_k·d)` for k = 1 … N−1, `t_0 = 1 − Σ t_k`;
 //! * it is a hit when t lies in the open interval `(tmin, tmax)` and every `t_k ≥ −BARY_SLACK`.
+//!
+//! The inside test is evaluated without waiting for the division: with `p = x_0 − C`,
+//! `w = (n̂·p)·d − (n̂·d)·p = (n̂·d)·(X(t) − x_0)`, so `u_k = r_k·w = (n̂·d)·t_k` and the signs
+//! are compared against `BARY_SLACK·|n̂·d|`; the coordinates `t_k = u_k/(n̂·d)` are divided out
+//! only for the hit returned. Dot products are summed pairwise (short dependency chains).
 //!
 //! A ray is parallel to the hyperplane (and misses) when `|n̂·d| ≤ DEGENERACY_TOLERANCE·|d|`, the
 //! rule of [`crate::geometry::ray_hyperplane`]. Hits are two-sided: orientation is left to shading.
@@ -18,18 +22,23 @@
 //! ## BVH
 //! [`Bvh`] is built as a binary tree of N-D axis-aligned boxes with binned SAH (16 bins per axis
 //! over the centroid bounds, leaves of at most 4 simplices, object-median split when SAH cannot
-//! split or the tree gets deep), then collapsed into a 4-wide tree:
+//! split or the tree gets deep), then collapsed into an 8-wide tree:
 //!
-//! * nodes (`Vec`, depth-first order) hold the boxes of their up to 4 children as
-//!   structure-of-arrays `f32` (rounded outward, so conservative), tested together lane-wise;
+//! * nodes (a `Vec`, depth-first order) hold the boxes of their up to 8 children as
+//!   structure-of-arrays `f32` (rounded outward, so conservative), slab-tested together
+//!   (SSE, or AVX2 when the CPU has it);
 //! * every leaf is one *block*: its up to 4 prepared simplices stored structure-of-arrays
 //!   (`[f64; 4]` per coefficient, one lane per simplex) with their ids, in leaf order, so one
-//!   block test intersects the whole leaf with straight-line code the compiler vectorizes.
+//!   block test (SSE2, or one AVX2 register per coefficient) intersects the whole leaf.
 //!
-//! Traversal is nearest-first (hit children are visited in order of entry distance, nodes whose
-//! entry lies beyond the current best are skipped) with an explicit fixed-size stack and no heap
-//! allocation; [`Bvh::any_hit`] stops at the first accepted hit. The build is parallel (rayon)
-//! for large inputs and produces the same tree for any number of threads.
+//! Every SIMD path performs, per lane, exactly the operations of [`PreparedSimplex::intersect`]
+//! in the same order (no FMA), so all paths and the scalar test give bit-identical results.
+//!
+//! Traversal is nearest-first (the children met are visited in order of entry distance, and
+//! subtrees whose entry lies beyond the current best hit are skipped) with an explicit
+//! fixed-size stack and no heap allocation; [`Bvh::any_hit`] stops at the first accepted hit.
+//! The build is parallel (rayon) for large inputs and produces the same tree for any number of
+//! threads.
 
 use crate::geometry::{hyperplane, DEGENERACY_TOLERANCE};
 use crate::linalg::{dot, solve_block, sub, Matrix, Vector};
@@ -57,7 +66,7 @@ pub const MAX_LEAF: usize = W;
 /// Lanes of a block (simplices tested together).
 const W: usize = 4;
 /// Children of a node (boxes tested together).
-const NW: usize = 4;
+const NW: usize = 8;
 /// Bins per axis of the SAH build.
 const BINS: usize = 16;
 /// Below this depth SAH decides the binary splits; deeper, object-median splits bound the depth
@@ -76,7 +85,7 @@ const PAR_CHUNK: usize = 8 * 1024;
 /// culling never rejects a node holding a simplex whose computed t is within range.
 const T_PAD: f64 = 1e-9;
 /// Relative shift of the ray origin that makes the `f32` slab test conservative (see
-/// [`RayPre::new`]); 2⁻²⁰ covers the test's three roundings of ≤ 2⁻²⁴ each with a wide margin.
+/// [`RayPre::new`]); 2⁻²⁰ covers the test's four roundings of ≤ 2⁻²⁴ each with a wide margin.
 const SLAB_REL: f64 = 1.0 / (1u32 << 20) as f64;
 /// Relative padding of each simplex's box, covering the `BARY_SLACK` band around it (a point
 /// with `t_k ≥ −BARY_SLACK` is at most `BARY_SLACK·diameter` outside the simplex, and
@@ -126,7 +135,11 @@ impl<const N: usize> RayLocal<N> {
     #[inline(always)]
     fn new(ray: &Ray<N>) -> Self {
         let d2 = dot(&ray.dir, &ray.dir);
-        RayLocal { o: ray.origin, d: ray.dir, par2: DEGENERACY_TOLERANCE * DEGENERACY_TOLERANCE * d2 }
+        RayLocal {
+            o: ray.origin,
+            d: ray.dir,
+            par2: DEGENERACY_TOLERANCE * DEGENERACY_TOLERANCE * d2,
+        }
     }
 }
 
@@ -202,8 +215,8 @@ impl<const N: usize> PreparedSimplex<N> {
         let mut inside = true;
         for k in 1..N {
             u[k] = dot_pairwise(&self.m[k], &w);
-            // u_k·sign(n̂·d) = |n̂·d|·t_k.
-            let v = if den < 0.0 { -u[k] } else { u[k] };
+            // u_k·sign(n̂·d) = |n̂·d|·t_k (the sign bit, as the SIMD kernels flip it).
+            let v = if den.is_sign_negative() { -u[k] } else { u[k] };
             inside &= v >= thr;
             sum += v;
         }
@@ -280,8 +293,11 @@ fn bary_from<const N: usize>(u: &[f64; N], den: f64) -> [f64; N] {
     b
 }
 
+/// An axis-aligned box as its (min, max) corners.
+pub type Bounds<const N: usize> = ([f64; N], [f64; N]);
+
 /// The (min, max) corners of the bounding box of the points.
-pub fn simplex_bounds<const N: usize>(points: &[[f64; N]]) -> ([f64; N], [f64; N]) {
+pub fn simplex_bounds<const N: usize>(points: &[[f64; N]]) -> Bounds<N> {
     let mut lo = [f64::INFINITY; N];
     let mut hi = [f64::NEG_INFINITY; N];
     for p in points {
@@ -317,8 +333,10 @@ struct Node<const N: usize> {
 }
 
 impl<const N: usize> Node<N> {
-    const EMPTY: Self =
-        Node { b: [[[f32::INFINITY; NW]; N], [[f32::NEG_INFINITY; NW]; N]], child: [EMPTY; NW] };
+    const EMPTY: Self = Node {
+        b: [[[f32::INFINITY; NW]; N], [[f32::NEG_INFINITY; NW]; N]],
+        child: [EMPTY; NW],
+    };
 }
 
 /// A leaf: up to 4 prepared simplices, structure-of-arrays (lane = simplex).
@@ -480,7 +498,10 @@ impl<const N: usize> RayPre<N> {
             let s = self.near[i] & 1;
             let inv = ld(&self.inv[i]);
             let a = _mm256_mul_ps(_mm256_sub_ps(ld(&node.b[s][i]), ld(&self.o_near[i])), inv);
-            let c = _mm256_mul_ps(_mm256_sub_ps(ld(&node.b[s ^ 1][i]), ld(&self.o_far[i])), inv);
+            let c = _mm256_mul_ps(
+                _mm256_sub_ps(ld(&node.b[s ^ 1][i]), ld(&self.o_far[i])),
+                inv,
+            );
             near[i] = _mm256_max_ps(a, near[i]);
             far[i] = _mm256_min_ps(c, far[i]);
         }
@@ -570,7 +591,12 @@ impl<const N: usize> Block<N> {
             let ld = |a: &[f64; W], h: usize| _mm_loadu_pd(a.as_ptr().add(2 * h));
             let zero = _mm_setzero_pd();
             let d: [__m128d; N] = std::array::from_fn(|i| _mm_set1_pd(ray.d[i]));
-            let mut out = BlockHits { mask: 0, t: [0.0; W], den: [0.0; W], u: [[0.0; W]; N] };
+            let mut out = BlockHits {
+                mask: 0,
+                t: [0.0; W],
+                den: [0.0; W],
+                u: [[0.0; W]; N],
+            };
             let mut den = [zero; H];
             let mut num = [zero; H];
             let mut p = [[zero; N]; H];
@@ -578,9 +604,14 @@ impl<const N: usize> Block<N> {
             let mut any = 0;
             let (par2, lo, hi) = (_mm_set1_pd(ray.par2), _mm_set1_pd(tmin), _mm_set1_pd(tmax));
             for h in 0..H {
-                den[h] = sum2::<N>(std::array::from_fn(|i| _mm_mul_pd(ld(&self.m[0][i], h), d[i])));
-                p[h] = std::array::from_fn(|i| _mm_sub_pd(ld(&self.x0[i], h), _mm_set1_pd(ray.o[i])));
-                num[h] = sum2::<N>(std::array::from_fn(|i| _mm_mul_pd(ld(&self.m[0][i], h), p[h][i])));
+                den[h] = sum2::<N>(std::array::from_fn(|i| {
+                    _mm_mul_pd(ld(&self.m[0][i], h), d[i])
+                }));
+                p[h] =
+                    std::array::from_fn(|i| _mm_sub_pd(ld(&self.x0[i], h), _mm_set1_pd(ray.o[i])));
+                num[h] = sum2::<N>(std::array::from_fn(|i| {
+                    _mm_mul_pd(ld(&self.m[0][i], h), p[h][i])
+                }));
                 let t = _mm_div_pd(num[h], den[h]);
                 let par = _mm_cmpgt_pd(_mm_mul_pd(den[h], den[h]), par2);
                 ok[h] = _mm_and_pd(par, _mm_and_pd(_mm_cmpgt_pd(t, lo), _mm_cmplt_pd(t, hi)));
@@ -601,7 +632,9 @@ impl<const N: usize> Block<N> {
                 let flip = _mm_and_pd(sign, den[h]);
                 let mut sum = zero;
                 for k in 1..N {
-                    let u = sum2::<N>(std::array::from_fn(|i| _mm_mul_pd(ld(&self.m[k][i], h), w[i])));
+                    let u = sum2::<N>(std::array::from_fn(|i| {
+                        _mm_mul_pd(ld(&self.m[k][i], h), w[i])
+                    }));
                     _mm_storeu_pd(out.u[k].as_mut_ptr().add(2 * h), u);
                     // u_k·sign(n̂·d), exactly (a sign flip).
                     let v = _mm_xor_pd(u, flip);
@@ -641,11 +674,20 @@ impl<const N: usize> Block<N> {
         }
         let ld = |a: &[f64; W]| _mm256_loadu_pd(a.as_ptr());
         let d: [__m256d; N] = std::array::from_fn(|i| _mm256_set1_pd(ray.d[i]));
-        let mut out = BlockHits { mask: 0, t: [0.0; W], den: [0.0; W], u: [[0.0; W]; N] };
-        let den = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(ld(&self.m[0][i]), d[i])));
+        let mut out = BlockHits {
+            mask: 0,
+            t: [0.0; W],
+            den: [0.0; W],
+            u: [[0.0; W]; N],
+        };
+        let den = sum4::<N>(std::array::from_fn(|i| {
+            _mm256_mul_pd(ld(&self.m[0][i]), d[i])
+        }));
         let p: [__m256d; N] =
             std::array::from_fn(|i| _mm256_sub_pd(ld(&self.x0[i]), _mm256_set1_pd(ray.o[i])));
-        let num = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(ld(&self.m[0][i]), p[i])));
+        let num = sum4::<N>(std::array::from_fn(|i| {
+            _mm256_mul_pd(ld(&self.m[0][i]), p[i])
+        }));
         let t = _mm256_div_pd(num, den);
         let par = _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_mul_pd(den, den), _mm256_set1_pd(ray.par2));
         let above = _mm256_cmp_pd::<_CMP_GT_OQ>(t, _mm256_set1_pd(tmin));
@@ -653,24 +695,27 @@ impl<const N: usize> Block<N> {
         let mut ok = _mm256_and_pd(par, _mm256_and_pd(above, below));
         _mm256_storeu_pd(out.t.as_mut_ptr(), t);
         _mm256_storeu_pd(out.den.as_mut_ptr(), den);
-        if _mm256_movemask_pd(ok) == 0 {
-            return out;
-        }
         let sign = _mm256_set1_pd(-0.0);
-        let w: [__m256d; N] =
-            std::array::from_fn(|i| _mm256_sub_pd(_mm256_mul_pd(num, d[i]), _mm256_mul_pd(den, p[i])));
+        let w: [__m256d; N] = std::array::from_fn(|i| {
+            _mm256_sub_pd(_mm256_mul_pd(num, d[i]), _mm256_mul_pd(den, p[i]))
+        });
         let abs = _mm256_andnot_pd(sign, den);
         let thr = _mm256_mul_pd(_mm256_set1_pd(-BARY_SLACK), abs);
         let flip = _mm256_and_pd(sign, den);
         let mut sum = _mm256_setzero_pd();
         for k in 1..N {
-            let u = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(ld(&self.m[k][i]), w[i])));
+            let u = sum4::<N>(std::array::from_fn(|i| {
+                _mm256_mul_pd(ld(&self.m[k][i]), w[i])
+            }));
             _mm256_storeu_pd(out.u[k].as_mut_ptr(), u);
             let v = _mm256_xor_pd(u, flip);
             ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GE_OQ>(v, thr));
             sum = _mm256_add_pd(sum, v);
         }
-        ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GE_OQ>(_mm256_sub_pd(abs, sum), thr));
+        ok = _mm256_and_pd(
+            ok,
+            _mm256_cmp_pd::<_CMP_GE_OQ>(_mm256_sub_pd(abs, sum), thr),
+        );
         out.mask = _mm256_movemask_pd(ok) as u32 & ((1 << self.count) - 1);
         out
     }
@@ -679,7 +724,12 @@ impl<const N: usize> Block<N> {
     #[cfg(not(target_arch = "x86_64"))]
     #[inline(always)]
     fn hit(&self, ray: &RayLocal<N>, tmin: f64, tmax: f64) -> BlockHits<N> {
-        let mut out = BlockHits { mask: 0, t: [0.0; W], den: [0.0; W], u: [[0.0; W]; N] };
+        let mut out = BlockHits {
+            mask: 0,
+            t: [0.0; W],
+            den: [0.0; W],
+            u: [[0.0; W]; N],
+        };
         for l in 0..self.count as usize {
             let lane = PreparedSimplex {
                 m: std::array::from_fn(|k| std::array::from_fn(|i| self.m[k][i][l])),
@@ -704,7 +754,7 @@ impl<const N: usize> Block<N> {
 /// A bounding-volume hierarchy over prepared simplices (see the module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Bvh<const N: usize> {
-    /// 4-wide nodes in depth-first order; the root is node 0 (none when empty).
+    /// Wide nodes in depth-first order; the root is node 0 (none when empty).
     nodes: Vec<Node<N>>,
     /// Leaves, in leaf order.
     blocks: Vec<Block<N>>,
@@ -763,7 +813,11 @@ struct Bin<const N: usize> {
 }
 
 impl<const N: usize> Bin<N> {
-    const EMPTY: Self = Bin { count: 0, min: [f64::INFINITY; N], max: [f64::NEG_INFINITY; N] };
+    const EMPTY: Self = Bin {
+        count: 0,
+        min: [f64::INFINITY; N],
+        max: [f64::NEG_INFINITY; N],
+    };
 
     #[inline]
     fn grow(&mut self, lo: &Vector<N>, hi: &Vector<N>, count: u32) {
@@ -864,7 +918,9 @@ impl<const N: usize> Builder<N> {
     /// result as the sequential loop.
     fn info(&self, idx: &[u32]) -> Info<N> {
         if idx.len() >= self.par_min.max(2 * PAR_CHUNK) {
-            idx.par_chunks(PAR_CHUNK).map(|c| self.info_seq(c)).reduce(Info::empty, Info::merge)
+            idx.par_chunks(PAR_CHUNK)
+                .map(|c| self.info_seq(c))
+                .reduce(Info::empty, Info::merge)
         } else {
             self.info_seq(idx)
         }
@@ -887,17 +943,19 @@ impl<const N: usize> Builder<N> {
     /// The SAH bins; counts and min/max are exact, so the parallel reduction is deterministic.
     fn bins(&self, idx: &[u32], cmin: &Vector<N>, scale: &Vector<N>) -> Bins<N> {
         if idx.len() >= self.par_min.max(2 * PAR_CHUNK) {
-            idx.par_chunks(PAR_CHUNK).map(|c| self.bin_seq(c, cmin, scale)).reduce(
-                || [[Bin::EMPTY; BINS]; N],
-                |mut a, b| {
-                    for ax in 0..N {
-                        for k in 0..BINS {
-                            a[ax][k].grow(&b[ax][k].min, &b[ax][k].max, b[ax][k].count);
+            idx.par_chunks(PAR_CHUNK)
+                .map(|c| self.bin_seq(c, cmin, scale))
+                .reduce(
+                    || [[Bin::EMPTY; BINS]; N],
+                    |mut a, b| {
+                        for ax in 0..N {
+                            for k in 0..BINS {
+                                a[ax][k].grow(&b[ax][k].min, &b[ax][k].max, b[ax][k].count);
+                            }
                         }
-                    }
-                    a
-                },
-            )
+                        a
+                    },
+                )
         } else {
             self.bin_seq(idx, cmin, scale)
         }
@@ -943,7 +1001,8 @@ impl<const N: usize> Builder<N> {
                     if n_left == 0 || n_left == n {
                         continue;
                     }
-                    let cost = half_area(&left.min, &left.max) * blocks_of(left.count) + right_cost[s];
+                    let cost =
+                        half_area(&left.min, &left.max) * blocks_of(left.count) + right_cost[s];
                     if best.is_none_or(|(c, _, _)| cost < c) {
                         best = Some((cost, a, s));
                     }
@@ -967,7 +1026,9 @@ impl<const N: usize> Builder<N> {
         let mid = n / 2;
         let cent = &self.cent;
         idx.select_nth_unstable_by(mid, |&p, &q| {
-            cent[p as usize][axis].total_cmp(&cent[q as usize][axis]).then(p.cmp(&q))
+            cent[p as usize][axis]
+                .total_cmp(&cent[q as usize][axis])
+                .then(p.cmp(&q))
         });
         Some(mid)
     }
@@ -1050,11 +1111,14 @@ fn flatten<const N: usize>(b: Built<N>, out: &mut Vec<BNode<N>>) {
     }
 }
 
-/// Collapses the binary tree into 4-wide nodes and blocks (both in depth-first order).
+/// Collapses the binary tree into wide nodes and blocks (both in depth-first order).
 struct Collapse<'a, const N: usize> {
     bin: &'a [BNode<N>],
+    /// The input simplices and ids, and the leaf order: `order[j]` is the input index of the
+    /// j-th simplex in leaf order.
     prims: &'a [PreparedSimplex<N>],
     ids: &'a [u32],
+    order: &'a [u32],
     nodes: Vec<Node<N>>,
     blocks: Vec<Block<N>>,
 }
@@ -1076,9 +1140,15 @@ impl<const N: usize> Collapse<'_, N> {
 
     fn leaf(&mut self, b: usize) -> u32 {
         let nd = self.bin[b];
-        let mut block = Block { m: [[[0.0; W]; N]; N], x0: [[0.0; W]; N], ids: [EMPTY; W], count: nd.count };
+        let mut block = Block {
+            m: [[[0.0; W]; N]; N],
+            x0: [[0.0; W]; N],
+            ids: [EMPTY; W],
+            count: nd.count,
+        };
         for l in 0..nd.count as usize {
-            let p = &self.prims[nd.first as usize + l];
+            let src = self.order[nd.first as usize + l] as usize;
+            let p = &self.prims[src];
             for k in 0..N {
                 for i in 0..N {
                     block.m[k][i][l] = p.m[k][i];
@@ -1087,7 +1157,7 @@ impl<const N: usize> Collapse<'_, N> {
             for i in 0..N {
                 block.x0[i][l] = p.x0[i];
             }
-            block.ids[l] = self.ids[nd.first as usize + l];
+            block.ids[l] = self.ids[src];
         }
         self.blocks.push(block);
         LEAF | (self.blocks.len() - 1) as u32
@@ -1161,10 +1231,18 @@ impl<const N: usize> Bvh<N> {
         par_min: usize,
     ) -> Self {
         let n = prims.len();
-        assert!(ids.len() == n && bounds.len() == n, "Bvh::build: prims, ids, bounds lengths differ");
+        assert!(
+            ids.len() == n && bounds.len() == n,
+            "Bvh::build: prims, ids, bounds lengths differ"
+        );
         assert!(n < LEAF as usize, "Bvh::build: too many simplices");
         if n == 0 {
-            return Bvh { nodes: Vec::new(), blocks: Vec::new(), len: 0, reach: 0.0 };
+            return Bvh {
+                nodes: Vec::new(),
+                blocks: Vec::new(),
+                len: 0,
+                reach: 0.0,
+            };
         }
         // Pad each box by BOX_PAD of its largest extent, so that it contains the BARY_SLACK band.
         let padded: Vec<(Vector<N>, Vector<N>)> = bounds
@@ -1172,20 +1250,34 @@ impl<const N: usize> Bvh<N> {
             .map(|(lo, hi)| {
                 let ext = (0..N).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
                 let pad = BOX_PAD * ext;
-                (std::array::from_fn(|i| lo[i] - pad), std::array::from_fn(|i| hi[i] + pad))
+                (
+                    std::array::from_fn(|i| lo[i] - pad),
+                    std::array::from_fn(|i| hi[i] + pad),
+                )
             })
             .collect();
-        let cent =
-            padded.iter().map(|(lo, hi)| std::array::from_fn(|i| 0.5 * (lo[i] + hi[i]))).collect();
-        let builder = Builder { bounds: padded, cent, par_min: par_min.max(2) };
+        let cent = padded
+            .iter()
+            .map(|(lo, hi)| std::array::from_fn(|i| 0.5 * (lo[i] + hi[i])))
+            .collect();
+        let builder = Builder {
+            bounds: padded,
+            cent,
+            par_min: par_min.max(2),
+        };
         let mut idx: Vec<u32> = (0..n as u32).collect();
         let built = builder.build_par(&mut idx, 0, 0);
         drop(builder);
         let mut bin = Vec::new();
         flatten(built, &mut bin);
-        let prims: Vec<PreparedSimplex<N>> = idx.iter().map(|&p| prims[p as usize]).collect();
-        let ids: Vec<u32> = idx.iter().map(|&p| ids[p as usize]).collect();
-        let mut c = Collapse { bin: &bin, prims: &prims, ids: &ids, nodes: Vec::new(), blocks: Vec::new() };
+        let mut c = Collapse {
+            bin: &bin,
+            prims: &prims,
+            ids: &ids,
+            order: &idx,
+            nodes: Vec::new(),
+            blocks: Vec::with_capacity(bin.iter().filter(|b| b.count > 0).count()),
+        };
         if bin[0].count > 0 {
             // A single leaf: a root node with one child.
             c.nodes.push(Node::EMPTY);
@@ -1206,15 +1298,28 @@ impl<const N: usize> Bvh<N> {
             .map(|i| f64::from(root.min[i].abs()).max(f64::from(root.max[i].abs())))
             .fold(0.0, f64::max);
         // Non-finite bounds only widen the slab test (and the shift saturates to infinity).
-        let reach = if reach.is_finite() { reach } else { f64::from(f32::MAX) };
-        Bvh { nodes, blocks, len: n, reach }
+        let reach = if reach.is_finite() {
+            reach
+        } else {
+            f64::from(f32::MAX)
+        };
+        Bvh {
+            nodes,
+            blocks,
+            len: n,
+            reach,
+        }
     }
 
     /// Builds over the non-degenerate simplices of `points`, with `ids[i]` the id of
     /// `points[i]` (degenerate ones are skipped). Preparation runs in parallel.
     pub fn from_simplices(points: &[[[f64; N]; N]], ids: &[u32]) -> Self {
-        assert_eq!(points.len(), ids.len(), "Bvh::from_simplices: points and ids lengths differ");
-        let prepared: Vec<(PreparedSimplex<N>, u32, ([f64; N], [f64; N]))> = points
+        assert_eq!(
+            points.len(),
+            ids.len(),
+            "Bvh::from_simplices: points and ids lengths differ"
+        );
+        let prepared: Vec<(PreparedSimplex<N>, u32, Bounds<N>)> = points
             .par_iter()
             .zip(ids.par_iter())
             .filter_map(|(p, &id)| Some((PreparedSimplex::new(p)?, id, simplex_bounds(p))))
@@ -1232,8 +1337,11 @@ impl<const N: usize> Bvh<N> {
 
     /// Builds over the non-degenerate simplices of a mesh; a hit's `prim` is the simplex index.
     pub fn from_mesh(mesh: &Mesh<N>) -> Self {
-        let points: Vec<[[f64; N]; N]> =
-            (0..mesh.simplices.len()).into_par_iter().map(|s| mesh.simplex_points(s)).collect();
+        let points: Vec<[[f64; N]; N]> = mesh
+            .simplices
+            .par_iter()
+            .map(|idx| std::array::from_fn(|k| mesh.vertices[idx[k] as usize]))
+            .collect();
         let ids: Vec<u32> = (0..points.len() as u32).collect();
         Self::from_simplices(&points, &ids)
     }
@@ -1248,7 +1356,7 @@ impl<const N: usize> Bvh<N> {
         self.len == 0
     }
 
-    /// Number of (4-wide) nodes.
+    /// Number of (8-wide) nodes.
     pub fn node_count(&self) -> usize {
         self.nodes.len()
     }
@@ -1264,13 +1372,19 @@ impl<const N: usize> Bvh<N> {
             + self.blocks.len() * std::mem::size_of::<Block<N>>()
     }
 
-    /// Depth of the 4-wide tree counting the leaf level (0 when empty).
+    /// Depth of the 8-wide tree counting the leaf level (0 when empty).
     pub fn depth(&self) -> usize {
         fn rec<const N: usize>(nodes: &[Node<N>], i: usize) -> usize {
             let deepest = nodes[i]
                 .child
                 .iter()
-                .map(|&c| if c == EMPTY || c & LEAF != 0 { 1 } else { rec(nodes, c as usize) })
+                .map(|&c| {
+                    if c == EMPTY || c & LEAF != 0 {
+                        1
+                    } else {
+                        rec(nodes, c as usize)
+                    }
+                })
                 .max()
                 .unwrap_or(0);
             1 + deepest
@@ -1318,7 +1432,13 @@ impl<const N: usize> Bvh<N> {
 
     /// Whether any simplex whose id passes `accept` is hit with t in (tmin, tmax) (shadow rays;
     /// stops at the first such hit).
-    pub fn any_hit(&self, ray: &Ray<N>, tmin: f64, tmax: f64, accept: impl Fn(u32) -> bool) -> bool {
+    pub fn any_hit(
+        &self,
+        ray: &Ray<N>,
+        tmin: f64,
+        tmax: f64,
+        accept: impl Fn(u32) -> bool,
+    ) -> bool {
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: AVX2 is available.
@@ -1333,14 +1453,26 @@ impl<const N: usize> Bvh<N> {
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn any_hit_avx2(&self, ray: &Ray<N>, tmin: f64, tmax: f64, accept: impl Fn(u32) -> bool) -> bool {
+    unsafe fn any_hit_avx2(
+        &self,
+        ray: &Ray<N>,
+        tmin: f64,
+        tmax: f64,
+        accept: impl Fn(u32) -> bool,
+    ) -> bool {
         self.any_hit_impl::<true>(ray, tmin, tmax, accept)
     }
 
     /// Tests a block, with the AVX2 kernel when `AVX` (only instantiated inside functions
     /// compiled for AVX2).
     #[inline(always)]
-    fn block_hit<const AVX: bool>(&self, block: &Block<N>, ray: &RayLocal<N>, tmin: f64, tmax: f64) -> BlockHits<N> {
+    fn block_hit<const AVX: bool>(
+        &self,
+        block: &Block<N>,
+        ray: &RayLocal<N>,
+        tmin: f64,
+        tmax: f64,
+    ) -> BlockHits<N> {
         #[cfg(target_arch = "x86_64")]
         if AVX {
             // SAFETY: `AVX` is only true in code running after an AVX2 check.
@@ -1352,7 +1484,13 @@ impl<const N: usize> Bvh<N> {
     /// Slab test with the AVX2 kernel when `AVX` (only instantiated inside functions compiled
     /// for AVX2).
     #[inline(always)]
-    fn slab<const AVX: bool>(&self, pre: &RayPre<N>, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
+    fn slab<const AVX: bool>(
+        &self,
+        pre: &RayPre<N>,
+        node: &Node<N>,
+        lo: f32,
+        hi: f32,
+    ) -> (u32, [f32; NW]) {
         #[cfg(target_arch = "x86_64")]
         if AVX && NW == 8 {
             // SAFETY: `AVX` is only true in code running after an AVX2 check.
@@ -1382,26 +1520,26 @@ impl<const N: usize> Bvh<N> {
         if mask & (mask - 1) == 0 {
             return nd.child[mask.trailing_zeros() as usize];
         }
-        // Insertion sort of the children met by entry parameter, nearest last.
-        let mut hits = [(0u32, 0.0f32); NW];
+        // Insertion sort of the children met by entry parameter (a fixed-trip loop over the
+        // lanes predicts better than iterating over the set bits).
+        let mut hits = [(0.0f32, 0u32); NW];
         let mut c = 0;
-        let mut m = mask;
-        while m != 0 {
-            let l = m.trailing_zeros() as usize;
-            m &= m - 1;
-            let mut j = c;
-            while j > 0 && hits[j - 1].1 < tn[l] {
-                hits[j] = hits[j - 1];
-                j -= 1;
+        for l in 0..NW {
+            if mask & (1 << l) != 0 {
+                let mut j = c;
+                while j > 0 && hits[j - 1].0 > tn[l] {
+                    hits[j] = hits[j - 1];
+                    j -= 1;
+                }
+                hits[j] = (tn[l], nd.child[l]);
+                c += 1;
             }
-            hits[j] = (nd.child[l], tn[l]);
-            c += 1;
         }
-        for h in &hits[..c - 1] {
-            stack[*sp].write(*h);
+        for j in (1..c).rev() {
+            stack[*sp].write((hits[j].1, hits[j].0));
             *sp += 1;
         }
-        hits[c - 1].0
+        hits[0].1
     }
 
     #[inline(always)]
@@ -1420,7 +1558,14 @@ impl<const N: usize> Bvh<N> {
         // use the exact open interval.
         let lo = f32_down(pad_down(tmin));
         let mut limit = f32_up(pad_up(tmax));
-        let mut best = Best { t: tmax, id: u32::MAX, bary: [0.0; N], found: false };
+        let mut best = Best {
+            t: tmax,
+            id: u32::MAX,
+            bary: [0.0; N],
+            found: false,
+        };
+        // Blocks accept t < tmax, then, while a hit is held, t ≤ best.t (ties are settled by id).
+        let mut tmax_b = tmax;
         let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK_SIZE];
         let mut sp = 0usize;
         let mut cur = 0u32;
@@ -1431,8 +1576,6 @@ impl<const N: usize> Bvh<N> {
             }
             if cur != EMPTY {
                 let block = &self.blocks[(cur & !LEAF) as usize];
-                // While a hit is held, accept t ≤ best.t (ties are settled by id).
-                let tmax_b = if best.found { best.t.next_up() } else { tmax };
                 let hits = self.block_hit::<AVX>(block, &pre.local, tmin, tmax_b);
                 let mut mask = hits.mask;
                 while mask != 0 {
@@ -1440,15 +1583,25 @@ impl<const N: usize> Bvh<N> {
                     mask &= mask - 1;
                     let (t, id) = (hits.t[l], block.ids[l]);
                     if (!best.found || t < best.t || (t == best.t && id < best.id)) && accept(id) {
-                        best = Best { t, id, bary: hits.bary(l), found: true };
+                        best = Best {
+                            t,
+                            id,
+                            bary: hits.bary(l),
+                            found: true,
+                        };
                         limit = f32_up(pad_up(t));
+                        tmax_b = t.next_up();
                     }
                 }
             }
             // Pop the next subtree whose entry parameter is still within reach.
             loop {
                 if sp == 0 {
-                    return best.found.then_some(Hit { t: best.t, prim: best.id, bary: best.bary });
+                    return best.found.then_some(Hit {
+                        t: best.t,
+                        prim: best.id,
+                        bary: best.bary,
+                    });
                 }
                 sp -= 1;
                 // SAFETY: the entries below `sp` were all written by `descend`.
@@ -1513,13 +1666,22 @@ mod tests {
     use std::collections::HashSet;
 
     /// Random simplex with vertices `center + random_vector(size)`.
-    fn random_simplex<const N: usize>(r: &mut TestRng, center: &Vector<N>, size: f64) -> [[f64; N]; N] {
+    fn random_simplex<const N: usize>(
+        r: &mut TestRng,
+        center: &Vector<N>,
+        size: f64,
+    ) -> [[f64; N]; N] {
         std::array::from_fn(|_| add(center, &random_vector::<N>(r, size)))
     }
 
     /// A point of the simplex's hyperplane with random barycentric weights in [lo, hi] (then
     /// normalized to sum 1).
-    fn plane_point<const N: usize>(r: &mut TestRng, pts: &[[f64; N]; N], lo: f64, hi: f64) -> Vector<N> {
+    fn plane_point<const N: usize>(
+        r: &mut TestRng,
+        pts: &[[f64; N]; N],
+        lo: f64,
+        hi: f64,
+    ) -> Vector<N> {
         let mut w: Vec<f64> = (0..N).map(|_| r.random_range(lo..hi)).collect();
         let s: f64 = w.iter().sum();
         w.iter_mut().for_each(|x| *x /= s);
@@ -1544,9 +1706,16 @@ mod tests {
             assert_eq!(ps.origin(), pts[0]);
             let origin = random_vector::<N>(&mut r, 4.0);
             let target = plane_point(&mut r, &pts, -0.12, 1.0);
-            let dir = scale(&crate::linalg::sub(&target, &origin), r.random_range(0.2..3.0));
+            let dir = scale(
+                &crate::linalg::sub(&target, &origin),
+                r.random_range(0.2..3.0),
+            );
             let ray = Ray { origin, dir };
-            let (tmin, tmax) = if case % 4 == 0 { (0.5, 2.0) } else { (0.0, f64::INFINITY) };
+            let (tmin, tmax) = if case % 4 == 0 {
+                (0.5, 2.0)
+            } else {
+                (0.0, f64::INFINITY)
+            };
             let got = ps.intersect(&ray, tmin, tmax);
             // Independent computation: eq. of section "Ray Tracing" + Gram/Cramer barycentrics.
             let t = ray_hyperplane(&origin, &dir, &pts).unwrap();
@@ -1557,13 +1726,23 @@ mod tests {
             if min_bary.abs() <= 1e-9 || (t - tmin).abs() < 1e-9 || (t - tmax).abs() < 1e-9 {
                 near_edge += 1;
             } else {
-                assert_eq!(got.is_some(), expect, "N={N} case {case}: t={t} bary={bary:?}");
+                assert_eq!(
+                    got.is_some(),
+                    expect,
+                    "N={N} case {case}: t={t} bary={bary:?}"
+                );
             }
             if let Some((gt, gb)) = got {
                 hits += 1;
-                assert!((gt - t).abs() <= 1e-9 * t.abs().max(1.0), "N={N}: t {gt} vs {t}");
+                assert!(
+                    (gt - t).abs() <= 1e-9 * t.abs().max(1.0),
+                    "N={N}: t {gt} vs {t}"
+                );
                 for k in 0..N {
-                    assert!((gb[k] - bary[k]).abs() <= 1e-9, "N={N}: bary {gb:?} vs {bary:?}");
+                    assert!(
+                        (gb[k] - bary[k]).abs() <= 1e-9,
+                        "N={N}: bary {gb:?} vs {bary:?}"
+                    );
                 }
                 let s: f64 = gb.iter().sum();
                 assert!((s - 1.0).abs() < 1e-12);
@@ -1572,10 +1751,30 @@ mod tests {
             }
             // A direction inside the hyperplane is parallel: a miss.
             let along = crate::linalg::sub(&pts[1], &pts[0]);
-            assert_eq!(ps.intersect(&Ray { origin, dir: along }, f64::NEG_INFINITY, f64::INFINITY), None);
-            assert_eq!(ps.intersect(&Ray { origin, dir: [0.0; N] }, f64::NEG_INFINITY, f64::INFINITY), None);
+            assert_eq!(
+                ps.intersect(
+                    &Ray { origin, dir: along },
+                    f64::NEG_INFINITY,
+                    f64::INFINITY
+                ),
+                None
+            );
+            assert_eq!(
+                ps.intersect(
+                    &Ray {
+                        origin,
+                        dir: [0.0; N]
+                    },
+                    f64::NEG_INFINITY,
+                    f64::INFINITY
+                ),
+                None
+            );
         }
-        assert!(hits > 400 && misses > 400 && near_edge < 30, "N={N}: {hits} {misses} {near_edge}");
+        assert!(
+            hits > 400 && misses > 400 && near_edge < 30,
+            "N={N}: {hits} {misses} {near_edge}"
+        );
     }
 
     #[test]
@@ -1593,7 +1792,10 @@ mod tests {
         let b = PreparedSimplex::<3>::new(&[[0., 0., 0.], [0., 1., 0.], [1., 0., 0.]]).unwrap();
         assert_eq!(a.normal(), [0., 0., 1.]);
         assert_eq!(b.normal(), [0., 0., -1.]);
-        let ray = Ray { origin: [0.25, 0.25, 2.0], dir: [0.0, 0.0, -1.0] };
+        let ray = Ray {
+            origin: [0.25, 0.25, 2.0],
+            dir: [0.0, 0.0, -1.0],
+        };
         let (ta, ba) = a.intersect(&ray, 0.0, f64::INFINITY).unwrap();
         let (tb, bb) = b.intersect(&ray, 0.0, f64::INFINITY).unwrap();
         assert_eq!((ta, tb), (2.0, 2.0));
@@ -1643,7 +1845,9 @@ mod tests {
     }
 
     fn prepare<const N: usize>(soup: &[([[f64; N]; N], u32)]) -> Vec<(PreparedSimplex<N>, u32)> {
-        soup.iter().filter_map(|(p, id)| Some((PreparedSimplex::new(p)?, *id))).collect()
+        soup.iter()
+            .filter_map(|(p, id)| Some((PreparedSimplex::new(p)?, *id)))
+            .collect()
     }
 
     fn build_soup<const N: usize>(soup: &[([[f64; N]; N], u32)], par_min: usize) -> Bvh<N> {
@@ -1692,7 +1896,21 @@ mod tests {
                     let want = brute(&prims, &ray, tmin, tmax, f);
                     let got = bvh.closest_hit(&ray, tmin, tmax, f);
                     assert_eq!(got, want, "N={N} round {round} case {case} filter {fi}");
-                    assert_eq!(bvh.any_hit(&ray, tmin, tmax, f), want.is_some(), "N={N} any_hit");
+                    assert_eq!(
+                        bvh.any_hit(&ray, tmin, tmax, f),
+                        want.is_some(),
+                        "N={N} any_hit"
+                    );
+                    // The portable/SSE path too (the public calls take AVX2 when available).
+                    let sse = bvh.closest_hit_impl::<false>(&ray, tmin, tmax, f);
+                    assert_eq!(
+                        sse, want,
+                        "N={N} round {round} case {case} filter {fi}: SSE path"
+                    );
+                    assert_eq!(
+                        bvh.any_hit_impl::<false>(&ray, tmin, tmax, f),
+                        want.is_some()
+                    );
                     if let Some(h) = want {
                         hits += 1;
                         let same_t = prims.iter().filter(|(p, id)| {
@@ -1703,7 +1921,10 @@ mod tests {
                 }
             }
             if count == 300 {
-                assert!(hits > 1000 && ties > 10, "N={N}: {hits} hits, {ties} exact ties");
+                assert!(
+                    hits > 1000 && ties > 10,
+                    "N={N}: {hits} hits, {ties} exact ties"
+                );
             }
         }
     }
@@ -1716,8 +1937,12 @@ mod tests {
     #[test]
     fn accel_empty_bvh_misses() {
         let bvh = Bvh::<3>::build(vec![], vec![], vec![]);
-        assert!(bvh.is_empty() && bvh.len() == 0 && bvh.node_count() == 0 && bvh.depth() == 0);
-        let ray = Ray { origin: [0.0; 3], dir: [1.0, 0.0, 0.0] };
+        assert!(bvh.is_empty() && bvh.node_count() == 0 && bvh.depth() == 0);
+        assert_eq!(bvh.len(), 0);
+        let ray = Ray {
+            origin: [0.0; 3],
+            dir: [1.0, 0.0, 0.0],
+        };
         assert_eq!(bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true), None);
         assert!(!bvh.any_hit(&ray, 0.0, f64::INFINITY, |_| true));
     }
@@ -1788,8 +2013,9 @@ mod tests {
         // simplex's box is its whole facet, so each ray tests thousands of simplices).
         let mut targets: Vec<[i64; N]> = targets.into_iter().collect();
         targets.sort();
-        let (mut targets, mut mids): (Vec<_>, Vec<_>) =
-            targets.into_iter().partition(|g| g.iter().all(|x| x % 2 == 0));
+        let (mut targets, mut mids): (Vec<_>, Vec<_>) = targets
+            .into_iter()
+            .partition(|g| g.iter().all(|x| x % 2 == 0));
         for j in 0..mids.len().min(400) {
             let pick = r.random_range(j..mids.len());
             mids.swap(j, pick);
@@ -1803,13 +2029,18 @@ mod tests {
             } else {
                 let q = random_rotation::<N>(&mut r);
                 let d: Vector<N> = std::array::from_fn(|_| r.random_range(0.5..2.0));
-                (std::array::from_fn(|i| std::array::from_fn(|j| q[i][j] * d[j])), random_vector(&mut r, 3.0))
+                (
+                    std::array::from_fn(|i| std::array::from_fn(|j| q[i][j] * d[j])),
+                    random_vector(&mut r, 3.0),
+                )
             };
             let map = |g: &[i64; N], den: f64| -> Vector<N> {
-                let x: Vector<N> = std::array::from_fn(|i| 2.0 * g[i] as f64 / (den * k as f64) - 1.0);
+                let x: Vector<N> =
+                    std::array::from_fn(|i| 2.0 * g[i] as f64 / (den * k as f64) - 1.0);
                 add(&mat_vec(&m, &x), &shift)
             };
-            let simplices: Vec<[[f64; N]; N]> = cells.iter().map(|s| s.map(|v| map(&v, 1.0))).collect();
+            let simplices: Vec<[[f64; N]; N]> =
+                cells.iter().map(|s| s.map(|v| map(&v, 1.0))).collect();
             let ids: Vec<u32> = (0..simplices.len() as u32).collect();
             let bvh = Bvh::from_simplices(&simplices, &ids);
             assert_eq!(bvh.len(), simplices.len());
@@ -1817,9 +2048,15 @@ mod tests {
             for g in &targets {
                 let target = map(g, 2.0);
                 // From the inside: the one crossing is at the target, t = 1.
-                let ray = Ray { origin: center, dir: crate::linalg::sub(&target, &center) };
+                let ray = Ray {
+                    origin: center,
+                    dir: crate::linalg::sub(&target, &center),
+                };
                 let h = bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true);
-                assert!(h.is_some_and(|h| (h.t - 1.0).abs() < 1e-9), "N={N} shape {shape}: from inside to {g:?}: {h:?}");
+                assert!(
+                    h.is_some_and(|h| (h.t - 1.0).abs() < 1e-9),
+                    "N={N} shape {shape}: from inside to {g:?}: {h:?}"
+                );
                 // From outside, along a random direction and (axis-aligned cube) along an axis:
                 // the first crossing is at or before the target.
                 let mut origins = vec![add_scaled(&target, 4.0, &random_unit::<N>(&mut r))];
@@ -1830,10 +2067,16 @@ mod tests {
                     origins.push(o);
                 }
                 for origin in origins {
-                    let ray = Ray { origin, dir: crate::linalg::sub(&target, &origin) };
+                    let ray = Ray {
+                        origin,
+                        dir: crate::linalg::sub(&target, &origin),
+                    };
                     let h = bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true);
                     let ok = h.is_some_and(|h| h.t <= 1.0 + 1e-9);
-                    assert!(ok, "N={N} shape {shape}: outside {origin:?} to {g:?}: {h:?}");
+                    assert!(
+                        ok,
+                        "N={N} shape {shape}: outside {origin:?} to {g:?}: {h:?}"
+                    );
                     assert!(bvh.any_hit(&ray, 0.0, f64::INFINITY, |_| true));
                 }
             }
@@ -1866,7 +2109,10 @@ mod tests {
             // Maximal forking, and a one-thread pool, give the same tree.
             let c = build_soup(&s, 2);
             assert!(a == c, "N={N}: parallel build differs");
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .build()
+                .unwrap();
             let d = pool.install(|| build_soup(&s, 2));
             assert!(a == d, "N={N}: one-thread build differs");
             assert!(a.node_count() > 1 && a.memory_bytes() > 0);
@@ -1876,16 +2122,21 @@ mod tests {
 
     #[test]
     fn accel_slab_test_treats_boxes_as_closed() {
-        let mut node = Node4::<3> {
-            b: [[[f32::INFINITY; W]; 3], [[f32::NEG_INFINITY; W]; 3]],
-            child: [EMPTY; W],
-        };
+        let mut node = Node::<3>::EMPTY;
         for i in 0..3 {
             node.b[0][i][0] = 0.0;
             node.b[1][i][0] = 1.0;
         }
         let hit = |origin: [f64; 3], dir: [f64; 3]| {
-            RayPre::new(&Ray { origin, dir }, 1.0).slab(&node, 0.0, f32::INFINITY).0
+            let pre = RayPre::new(&Ray { origin, dir }, 1.0);
+            let (mask, tn) = pre.slab(&node, 0.0, f32::INFINITY);
+            #[cfg(target_arch = "x86_64")]
+            if std::is_x86_feature_detected!("avx2") {
+                // SAFETY: AVX2 is available.
+                let (m2, t2) = unsafe { pre.slab_avx2(&node, 0.0, f32::INFINITY) };
+                assert_eq!((mask, tn.map(f32::to_bits)), (m2, t2.map(f32::to_bits)));
+            }
+            mask
         };
         // Along a face, along an edge, from a face plane with zero components of both signs.
         assert_eq!(hit([-1.0, 0.0, 0.5], [1.0, 0.0, 0.0]), 1);
@@ -1893,10 +2144,93 @@ mod tests {
         assert_eq!(hit([0.5, 1.0, 0.5], [0.0, -0.0, 0.0]), 1);
         // Exactly at a corner, from outside.
         assert_eq!(hit([-1.0, -2.0, -3.0], [1.0, 2.0, 3.0]), 1);
-        assert_eq!(hit([1.0 + 1.0 / 3.0, 2.0, 3.0], [-1.0 / 3.0, -1.0, -2.0]), 1);
+        assert_eq!(
+            hit([1.0 + 1.0 / 3.0, 2.0, 3.0], [-1.0 / 3.0, -1.0, -2.0]),
+            1
+        );
         // Misses, and the empty slots never hit.
         assert_eq!(hit([-1.0, 1.5, 0.5], [1.0, 0.0, 0.0]), 0);
         assert_eq!(hit([-1.0, 0.5, 0.5], [-1.0, 0.0, 0.0]), 0);
         assert_eq!(hit([0.5, 0.5, 0.5], [0.0, 0.0, 0.0]), 1);
+    }
+
+    /// Every SIMD block kernel gives, lane by lane, the bits of `PreparedSimplex::intersect`.
+    fn block_kernels_agree<const N: usize>() {
+        let mut r = rng(5000 + N as u64);
+        for case in 0..400 {
+            let count = 1 + case % W;
+            let c = random_vector::<N>(&mut r, 1.0);
+            let pts: Vec<[[f64; N]; N]> = (0..count)
+                .map(|_| random_simplex(&mut r, &c, 1.0))
+                .collect();
+            let prims: Vec<PreparedSimplex<N>> =
+                pts.iter().filter_map(PreparedSimplex::new).collect();
+            if prims.len() != count {
+                continue;
+            }
+            let ids: Vec<u32> = (0..count as u32).collect();
+            let bounds = pts.iter().map(|p| simplex_bounds(p)).collect();
+            let bvh = Bvh::build(prims.clone(), ids, bounds);
+            assert_eq!(bvh.blocks.len(), 1);
+            let block = &bvh.blocks[0];
+            for _ in 0..20 {
+                let origin = random_vector::<N>(&mut r, 3.0);
+                let (pts_l, _) = (&pts[r.random_range(0..count)], 0);
+                let dir = crate::linalg::sub(&plane_point(&mut r, pts_l, -0.2, 1.0), &origin);
+                let ray = Ray { origin, dir };
+                let local = RayLocal::new(&ray);
+                let mut kernels = vec![block.hit(&local, 0.0, f64::INFINITY)];
+                #[cfg(target_arch = "x86_64")]
+                if std::is_x86_feature_detected!("avx2") {
+                    // SAFETY: AVX2 is available.
+                    kernels.push(unsafe { block.hit_avx2(&local, 0.0, f64::INFINITY) });
+                }
+                for hits in kernels {
+                    for l in 0..count {
+                        let id = block.ids[l] as usize;
+                        let want = prims[id].intersect(&ray, 0.0, f64::INFINITY);
+                        let got = (hits.mask >> l & 1 == 1).then(|| (hits.t[l], hits.bary(l)));
+                        let bits = |h: Option<(f64, [f64; N])>| {
+                            h.map(|(t, b)| (t.to_bits(), b.map(f64::to_bits)))
+                        };
+                        assert_eq!(bits(got), bits(want), "N={N} lane {l}");
+                    }
+                    assert_eq!(hits.mask >> count, 0);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn accel_simd_block_kernels_match_the_scalar_test_bit_for_bit() {
+        for_each_dim!(block_kernels_agree);
+    }
+
+    #[test]
+    fn accel_from_mesh_matches_from_simplices() {
+        let cells = cube_boundary::<4>(2);
+        let mut mesh = Mesh::<4>::default();
+        for c in &cells {
+            let base = mesh.vertices.len() as u32;
+            mesh.vertices.extend(c.iter().map(|v| v.map(|x| x as f64)));
+            mesh.simplices
+                .push(std::array::from_fn(|k| base + k as u32));
+        }
+        // One degenerate simplex (repeated vertex) is skipped; ids stay the simplex indices.
+        mesh.simplices.push([0, 0, 1, 2]);
+        let points: Vec<[[f64; 4]; 4]> = cells
+            .iter()
+            .map(|c| c.map(|v| v.map(|x| x as f64)))
+            .collect();
+        let ids: Vec<u32> = (0..points.len() as u32).collect();
+        let a = Bvh::from_mesh(&mesh);
+        assert!(a == Bvh::from_simplices(&points, &ids));
+        assert_eq!(a.len(), cells.len());
+        let ray = Ray {
+            origin: [1.0, 1.3, 0.7, -5.0],
+            dir: [0.0, 0.0, 0.0, 1.0],
+        };
+        let h = a.closest_hit(&ray, 0.0, f64::INFINITY, |_| true).unwrap();
+        assert!((h.t - 5.0).abs() < 1e-12 && (h.prim as usize) < cells.len());
     }
 }

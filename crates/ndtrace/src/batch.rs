@@ -59,8 +59,16 @@ where
     match (first, on) {
         (Some((index, d)), OnDegenerate::Error) => {
             // A degenerate simplex is the fault of `points`; a parallel direction of `arg`.
-            let arg = if d == Degenerate::Simplex { "points" } else { arg };
-            Err(NdError::Degenerate { arg: arg.into(), index, reason: d.reason() })
+            let arg = if d == Degenerate::Simplex {
+                "points"
+            } else {
+                arg
+            };
+            Err(NdError::Degenerate {
+                arg: arg.into(),
+                index,
+                reason: d.reason(),
+            })
         }
         _ => Ok(()),
     }
@@ -249,7 +257,12 @@ pub fn ray_hyperplane(
 }
 
 /// Batched [`geometry::transform_normal`]: matrix `(B, N, N)`, normal `(B, N)` → `(B, N)`.
-pub fn transform_normal(dim: usize, matrix: &[f64], normal: &[f64], out: &mut [f64]) -> NdResult<()> {
+pub fn transform_normal(
+    dim: usize,
+    matrix: &[f64],
+    normal: &[f64],
+    out: &mut [f64],
+) -> NdResult<()> {
     with_dim!(dim, N => {
         let b = batch_len("matrix", matrix, N * N, "(N, N)")?;
         check_len("normal", normal, N, b, "(N,)")?;
@@ -270,12 +283,18 @@ mod tests {
     #[test]
     fn batches_match_single_items_and_report_the_first_degenerate_index() {
         // Two 2D segments' hyperplanes: a good one and a repeated point.
-        let pts = [0.0, 0.0, 1.0, 0.0, /* degenerate: */ 2.0, 2.0, 2.0, 2.0];
+        let pts = [
+            0.0, 0.0, 1.0, 0.0, /* degenerate: */ 2.0, 2.0, 2.0, 2.0,
+        ];
         let mut out = [0.0; 6];
         let err = hyperplane(2, &pts, &mut out, OnDegenerate::Error).unwrap_err();
         assert_eq!(
             err,
-            NdError::Degenerate { arg: "points".into(), index: 1, reason: Degenerate::Simplex.reason() }
+            NdError::Degenerate {
+                arg: "points".into(),
+                index: 1,
+                reason: Degenerate::Simplex.reason()
+            }
         );
         hyperplane(2, &pts, &mut out, OnDegenerate::Nan).unwrap();
         assert_eq!(&out[..3], &[0.0, 1.0, 0.0]);
@@ -289,7 +308,13 @@ mod tests {
             generalized_cross(3, &[1.0; 5], &mut out),
             Err(NdError::Shape { .. })
         ));
-        assert_eq!(generalized_cross(9, &[], &mut []), Err(NdError::Dimension { dim: 9 }));
-        assert!(matches!(gram_volume(3, 4, &[0.0; 15], &mut [0.0]), Err(NdError::Shape { .. })));
+        assert_eq!(
+            generalized_cross(9, &[], &mut []),
+            Err(NdError::Dimension { dim: 9 })
+        );
+        assert!(matches!(
+            gram_volume(3, 4, &[0.0; 15], &mut [0.0]),
+            Err(NdError::Shape { .. })
+        ));
     }
 }

@@ -78,12 +78,14 @@ impl<const N: usize> Camera<N> {
             offset = add_scaled(&offset, u[k], &self.axis(k));
         }
         match self.projection {
-            Projection::Perspective => {
-                Ray { origin: self.position, dir: std::array::from_fn(|i| view[i] + offset[i]) }
-            }
-            Projection::Orthographic => {
-                Ray { origin: std::array::from_fn(|i| self.position[i] + offset[i]), dir: view }
-            }
+            Projection::Perspective => Ray {
+                origin: self.position,
+                dir: std::array::from_fn(|i| view[i] + offset[i]),
+            },
+            Projection::Orthographic => Ray {
+                origin: std::array::from_fn(|i| self.position[i] + offset[i]),
+                dir: view,
+            },
         }
     }
 
@@ -192,11 +194,18 @@ mod tests {
 
     #[test]
     fn three_d_look_at_is_the_usual_camera() {
-        let o = look_at_orientation(&[0.0, 0.0, 5.0], &[0.0, 0.0, 0.0], &[[0.0, 1.0, 0.0]]).unwrap();
+        let o =
+            look_at_orientation(&[0.0, 0.0, 5.0], &[0.0, 0.0, 0.0], &[[0.0, 1.0, 0.0]]).unwrap();
         // right = +x, up = +y, view = −z.
         assert_eq!(o, [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]]);
-        assert_eq!(look_at_orientation(&[0.0; 3], &[0.0; 3], &[[0.0, 1.0, 0.0]]), Err(None));
-        assert_eq!(look_at_orientation(&[0.0; 3], &[0.0, 1.0, 0.0], &[[0.0, 2.0, 0.0]]), Err(Some(0)));
+        assert_eq!(
+            look_at_orientation(&[0.0; 3], &[0.0; 3], &[[0.0, 1.0, 0.0]]),
+            Err(None)
+        );
+        assert_eq!(
+            look_at_orientation(&[0.0; 3], &[0.0, 1.0, 0.0], &[[0.0, 2.0, 0.0]]),
+            Err(Some(0))
+        );
     }
 
     #[test]

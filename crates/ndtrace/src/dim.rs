@@ -37,13 +37,34 @@ macro_rules! with_dim {
     ($dim:expr, $N:ident => $body:expr) => {{
         #[allow(clippy::redundant_closure_call)]
         match $dim {
-            2 => { const $N: usize = 2; Ok($body) }
-            3 => { const $N: usize = 3; Ok($body) }
-            4 => { const $N: usize = 4; Ok($body) }
-            5 => { const $N: usize = 5; Ok($body) }
-            6 => { const $N: usize = 6; Ok($body) }
-            7 => { const $N: usize = 7; Ok($body) }
-            8 => { const $N: usize = 8; Ok($body) }
+            2 => {
+                const $N: usize = 2;
+                Ok($body)
+            }
+            3 => {
+                const $N: usize = 3;
+                Ok($body)
+            }
+            4 => {
+                const $N: usize = 4;
+                Ok($body)
+            }
+            5 => {
+                const $N: usize = 5;
+                Ok($body)
+            }
+            6 => {
+                const $N: usize = 6;
+                Ok($body)
+            }
+            7 => {
+                const $N: usize = 7;
+                Ok($body)
+            }
+            8 => {
+                const $N: usize = 8;
+                Ok($body)
+            }
             d => Err($crate::NdError::Dimension { dim: d }),
         }
     }};

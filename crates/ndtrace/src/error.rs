@@ -14,19 +14,35 @@ pub enum NdError {
 
     /// An array of the wrong shape.
     #[error("{arg}: expected shape {expected}, got {got}")]
-    Shape { arg: String, expected: String, got: String },
+    Shape {
+        arg: String,
+        expected: String,
+        got: String,
+    },
 
     /// A NaN or infinite input value.
     #[error("{arg}: non-finite value {value} at index {index}")]
-    NonFinite { arg: String, index: usize, value: f64 },
+    NonFinite {
+        arg: String,
+        index: usize,
+        value: f64,
+    },
 
     /// A degenerate item of a batch (zero-volume simplex, parallel ray or segment).
     #[error("{arg}: {reason} at batch index {index}")]
-    Degenerate { arg: String, index: usize, reason: &'static str },
+    Degenerate {
+        arg: String,
+        index: usize,
+        reason: &'static str,
+    },
 
     /// A problem in a scene, located in its source (`file:line:col` or `<dict>`).
     #[error("{location}: {}{message}", if path.is_empty() { String::new() } else { format!("{path}: ") })]
-    Scene { location: String, path: String, message: String },
+    Scene {
+        location: String,
+        path: String,
+        message: String,
+    },
 
     /// A file that cannot be read or written.
     #[error("{path}: {message}")]

@@ -9,7 +9,10 @@
 /// ```
 pub fn det_bareiss(m: &[Vec<i128>]) -> i128 {
     let n = m.len();
-    assert!(m.iter().all(|row| row.len() == n), "det_bareiss needs a square matrix");
+    assert!(
+        m.iter().all(|row| row.len() == n),
+        "det_bareiss needs a square matrix"
+    );
     if n == 0 {
         return 1;
     }
@@ -62,7 +65,8 @@ mod tests {
         perms(n)
             .into_iter()
             .map(|p| {
-                let inversions = (0..n).flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+                let inversions = (0..n)
+                    .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
                     .filter(|&(i, j)| p[i] > p[j])
                     .count();
                 let s = if inversions % 2 == 0 { 1 } else { -1 };
@@ -75,12 +79,15 @@ mod tests {
     fn bareiss_matches_leibniz() {
         let mut seed = 12345u64;
         let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((seed >> 33) % 11) as i128 - 5
         };
         for n in 1..=6 {
             for _ in 0..40 {
-                let mut m: Vec<Vec<i128>> = (0..n).map(|_| (0..n).map(|_| next()).collect()).collect();
+                let mut m: Vec<Vec<i128>> =
+                    (0..n).map(|_| (0..n).map(|_| next()).collect()).collect();
                 if n > 1 && next() > 3 {
                     m[0][0] = 0; // exercise pivoting
                 }

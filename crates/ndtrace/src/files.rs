@@ -15,7 +15,10 @@ use exr::prelude::*;
 use std::path::{Path, PathBuf};
 
 fn file_err(path: &Path, message: impl std::fmt::Display) -> NdError {
-    NdError::File { path: path.display().to_string(), message: message.to_string() }
+    NdError::File {
+        path: path.display().to_string(),
+        message: message.to_string(),
+    }
 }
 
 /// Writes through `write(tmp)` to a temporary file next to `path`, then renames it over
@@ -29,12 +32,25 @@ where
         _ => PathBuf::from("."),
     };
     if !dir.is_dir() {
-        return Err(file_err(path, format!("cannot write: folder {} does not exist", dir.display())));
+        return Err(file_err(
+            path,
+            format!("cannot write: folder {} does not exist", dir.display()),
+        ));
     }
-    let name = path.file_name().ok_or_else(|| file_err(path, "not a file name"))?;
-    let ext = path.extension().map(|e| e.to_string_lossy().to_string()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .ok_or_else(|| file_err(path, "not a file name"))?;
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_string())
+        .unwrap_or_default();
     // Keep the extension last: some writers choose the format from it.
-    let tmp = dir.join(format!(".{}.tmp-{}.{}", name.to_string_lossy(), std::process::id(), ext));
+    let tmp = dir.join(format!(
+        ".{}.tmp-{}.{}",
+        name.to_string_lossy(),
+        std::process::id(),
+        ext
+    ));
     let result = write(&tmp).and_then(|_| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
     if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);
@@ -66,7 +82,10 @@ pub enum ExrContents {
 }
 
 fn encoding() -> Encoding {
-    Encoding { compression: Compression::ZIP16, ..Encoding::SMALL_LOSSLESS }
+    Encoding {
+        compression: Compression::ZIP16,
+        ..Encoding::SMALL_LOSSLESS
+    }
 }
 
 fn f32_channel(name: &str, v: Vec<f32>) -> AnyChannel<FlatSamples> {
@@ -77,18 +96,31 @@ fn f32_channel(name: &str, v: Vec<f32>) -> AnyChannel<FlatSamples> {
 pub fn write_picture_exr(path: &Path, p: &Picture) -> NdResult<()> {
     let n = p.width * p.height;
     if p.rgba.len() != n * 4 || p.width == 0 || p.height == 0 {
-        return Err(NdError::Value { arg: "image".into(), message: format!("expected ({}, {}, 4) values", p.height, p.width) });
+        return Err(NdError::Value {
+            arg: "image".into(),
+            message: format!("expected ({}, {}, 4) values", p.height, p.width),
+        });
     }
     let mut channels = vec![];
     for (k, name) in ["R", "G", "B", "A"].iter().enumerate() {
-        channels.push(f32_channel(name, p.rgba.iter().skip(k).step_by(4).copied().collect()));
+        channels.push(f32_channel(
+            name,
+            p.rgba.iter().skip(k).step_by(4).copied().collect(),
+        ));
     }
     if let Some(d) = &p.depth {
         channels.push(f32_channel("Z", d.clone()));
     }
-    let layer = Layer::new((p.width, p.height), LayerAttributes::default(), encoding(), AnyChannels::sort(channels.into()));
+    let layer = Layer::new(
+        (p.width, p.height),
+        LayerAttributes::default(),
+        encoding(),
+        AnyChannels::sort(channels.into()),
+    );
     let image = Image::from_layer(layer);
-    write_atomically(path, |tmp| image.write().to_file(tmp).map_err(|e| e.to_string()))
+    write_atomically(path, |tmp| {
+        image.write().to_file(tmp).map_err(|e| e.to_string())
+    })
 }
 
 /// Writes a retina (any N): one part per 2D slice for N ≥ 4, a single part for N ≤ 3.
@@ -100,37 +132,85 @@ pub fn write_retina_exr(path: &Path, r: &Retina, camera: Option<&str>) -> NdResu
     };
     let per = w * h;
     let parts = r.depth.len() / per.max(1);
-    let shape_text = r.shape.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(",");
+    let shape_text = r
+        .shape
+        .iter()
+        .map(|s| s.to_string())
+        .collect::<Vec<_>>()
+        .join(",");
     let mut layers = vec![];
     for k in 0..parts {
         let cells = k * per..(k + 1) * per;
         let mut ch = vec![];
         for (c, name) in ["R", "G", "B", "A"].iter().enumerate() {
-            ch.push(f32_channel(name, cells.clone().map(|i| r.rgba[i * 4 + c]).collect()));
+            ch.push(f32_channel(
+                name,
+                cells.clone().map(|i| r.rgba[i * 4 + c]).collect(),
+            ));
         }
         ch.push(f32_channel("Z", r.depth[cells.clone()].to_vec()));
         for a in 0..n {
-            ch.push(f32_channel(&format!("N.{a}"), cells.clone().map(|i| r.normal[i * n + a]).collect()));
+            ch.push(f32_channel(
+                &format!("N.{a}"),
+                cells.clone().map(|i| r.normal[i * n + a]).collect(),
+            ));
         }
-        ch.push(AnyChannel::new("objectId", FlatSamples::U32(cells.clone().map(|i| (r.object_id[i] + 1) as u32).collect())));
-        let pid: Vec<u64> = cells.clone().map(|i| (r.primitive_id[i] + 1) as u64).collect();
-        ch.push(AnyChannel::new("primitiveId.lo", FlatSamples::U32(pid.iter().map(|&p| p as u32).collect())));
-        ch.push(AnyChannel::new("primitiveId.hi", FlatSamples::U32(pid.iter().map(|&p| (p >> 32) as u32).collect())));
+        ch.push(AnyChannel::new(
+            "objectId",
+            FlatSamples::U32(cells.clone().map(|i| (r.object_id[i] + 1) as u32).collect()),
+        ));
+        let pid: Vec<u64> = cells
+            .clone()
+            .map(|i| (r.primitive_id[i] + 1) as u64)
+            .collect();
+        ch.push(AnyChannel::new(
+            "primitiveId.lo",
+            FlatSamples::U32(pid.iter().map(|&p| p as u32).collect()),
+        ));
+        ch.push(AnyChannel::new(
+            "primitiveId.hi",
+            FlatSamples::U32(pid.iter().map(|&p| (p >> 32) as u32).collect()),
+        ));
         let mut attrs = LayerAttributes::named(format!("slice.{k:05}").as_str());
-        attrs.other.insert(Text::from("ndtrace.dim"), AttributeValue::I32(n as i32));
-        attrs.other.insert(Text::from("ndtrace.retinaShape"), AttributeValue::Text(Text::from(shape_text.as_str())));
-        attrs.other.insert(Text::from("ndtrace.slice"), AttributeValue::I32(k as i32));
+        attrs
+            .other
+            .insert(Text::from("ndtrace.dim"), AttributeValue::I32(n as i32));
+        attrs.other.insert(
+            Text::from("ndtrace.retinaShape"),
+            AttributeValue::Text(Text::from(shape_text.as_str())),
+        );
+        attrs
+            .other
+            .insert(Text::from("ndtrace.slice"), AttributeValue::I32(k as i32));
         if let Some(c) = camera {
-            attrs.other.insert(Text::from("ndtrace.camera"), AttributeValue::Text(Text::from(c)));
+            attrs.other.insert(
+                Text::from("ndtrace.camera"),
+                AttributeValue::Text(Text::from(c)),
+            );
         }
-        layers.push(Layer::new((w, h), attrs, encoding(), AnyChannels::sort(ch.into())));
+        layers.push(Layer::new(
+            (w, h),
+            attrs,
+            encoding(),
+            AnyChannels::sort(ch.into()),
+        ));
     }
-    let image = Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))), layers);
-    write_atomically(path, |tmp| image.write().to_file(tmp).map_err(|e| e.to_string()))
+    let image = Image::from_layers(
+        ImageAttributes::new(IntegerBounds::from_dimensions((w, h))),
+        layers,
+    );
+    write_atomically(path, |tmp| {
+        image.write().to_file(tmp).map_err(|e| e.to_string())
+    })
 }
 
 fn channel<'a>(layer: &'a Layer<AnyChannels<FlatSamples>>, name: &str) -> Option<&'a FlatSamples> {
-    layer.channel_data.list.iter().find(|c| c.name.to_string() == name).map(|c| &c.sample_data)
+    layer
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name.to_string() == name)
+        .map(|c| &c.sample_data)
 }
 
 fn as_f32(s: &FlatSamples) -> Vec<f32> {
@@ -151,9 +231,14 @@ pub fn read_exr(path: &Path) -> NdResult<ExrContents> {
         exr::error::Error::Io(io) => file_err(path, format!("cannot read: {io}")),
         other => file_err(path, format!("not a readable OpenEXR file: {other}")),
     })?;
-    let first = image.layer_data.first().ok_or_else(|| file_err(path, "the file has no image parts"))?;
+    let first = image
+        .layer_data
+        .first()
+        .ok_or_else(|| file_err(path, "the file has no image parts"))?;
     let attr = |k: &str| first.attributes.other.get(&Text::from(k));
-    if let (Some(AttributeValue::I32(dim)), Some(AttributeValue::Text(shape))) = (attr("ndtrace.dim"), attr("ndtrace.retinaShape")) {
+    if let (Some(AttributeValue::I32(dim)), Some(AttributeValue::Text(shape))) =
+        (attr("ndtrace.dim"), attr("ndtrace.retinaShape"))
+    {
         let dim = *dim as usize;
         let shape: Vec<usize> = shape
             .to_string()
@@ -163,7 +248,10 @@ pub fn read_exr(path: &Path) -> NdResult<ExrContents> {
             .map_err(|_| file_err(path, "bad ndtrace.retinaShape attribute"))?;
         let cells: usize = shape.iter().product();
         if shape.len() + 1 != dim || cells == 0 {
-            return Err(file_err(path, "ndtrace.retinaShape does not match ndtrace.dim"));
+            return Err(file_err(
+                path,
+                "ndtrace.retinaShape does not match ndtrace.dim",
+            ));
         }
         let camera = match attr("ndtrace.camera") {
             Some(AttributeValue::Text(t)) => Some(t.to_string()),
@@ -180,27 +268,47 @@ pub fn read_exr(path: &Path) -> NdResult<ExrContents> {
         };
         // Parts in slice order.
         let mut layers: Vec<&Layer<AnyChannels<FlatSamples>>> = image.layer_data.iter().collect();
-        layers.sort_by_key(|l| match l.attributes.other.get(&Text::from("ndtrace.slice")) {
-            Some(AttributeValue::I32(k)) => *k,
-            _ => i32::MAX,
-        });
+        layers.sort_by_key(
+            |l| match l.attributes.other.get(&Text::from("ndtrace.slice")) {
+                Some(AttributeValue::I32(k)) => *k,
+                _ => i32::MAX,
+            },
+        );
         for layer in layers {
-            let need = |name: &str| channel(layer, name).ok_or_else(|| file_err(path, format!("retina part lacks channel {name}")));
-            let rgba: Vec<Vec<f32>> = ["R", "G", "B", "A"].iter().map(|c| need(c).map(as_f32)).collect::<NdResult<_>>()?;
-            let normals: Vec<Vec<f32>> = (0..dim).map(|a| need(&format!("N.{a}")).map(as_f32)).collect::<NdResult<_>>()?;
+            let need = |name: &str| {
+                channel(layer, name)
+                    .ok_or_else(|| file_err(path, format!("retina part lacks channel {name}")))
+            };
+            let rgba: Vec<Vec<f32>> = ["R", "G", "B", "A"]
+                .iter()
+                .map(|c| need(c).map(as_f32))
+                .collect::<NdResult<_>>()?;
+            let normals: Vec<Vec<f32>> = (0..dim)
+                .map(|a| need(&format!("N.{a}")).map(as_f32))
+                .collect::<NdResult<_>>()?;
             let z = as_f32(need("Z")?);
             let oid = as_u32(need("objectId")?);
-            let (lo, hi) = (as_u32(need("primitiveId.lo")?), as_u32(need("primitiveId.hi")?));
+            let (lo, hi) = (
+                as_u32(need("primitiveId.lo")?),
+                as_u32(need("primitiveId.hi")?),
+            );
             for i in 0..z.len() {
                 r.rgba.extend((0..4).map(|c| rgba[c][i]));
                 r.depth.push(z[i]);
                 r.normal.extend((0..dim).map(|a| normals[a][i]));
                 r.object_id.push(oid[i] as i32 - 1);
-                r.primitive_id.push(((hi[i] as u64) << 32 | lo[i] as u64) as i64 - 1);
+                r.primitive_id
+                    .push(((hi[i] as u64) << 32 | lo[i] as u64) as i64 - 1);
             }
         }
         if r.depth.len() != cells {
-            return Err(file_err(path, format!("the parts hold {} cells, the retina shape needs {cells}", r.depth.len())));
+            return Err(file_err(
+                path,
+                format!(
+                    "the parts hold {} cells, the retina shape needs {cells}",
+                    r.depth.len()
+                ),
+            ));
         }
         return Ok(ExrContents::Retina(r, camera));
     }
@@ -211,7 +319,12 @@ pub fn read_exr(path: &Path) -> NdResult<ExrContents> {
         (Some(r), Some(g), Some(b)) => (r, g, b),
         _ => match get("Y") {
             Some(y) => (y.clone(), y.clone(), y),
-            None => return Err(file_err(path, "no R, G, B (or Y) channels in the first part")),
+            None => {
+                return Err(file_err(
+                    path,
+                    "no R, G, B (or Y) channels in the first part",
+                ))
+            }
         },
     };
     let aa = get("A").unwrap_or_else(|| vec![1.0; n]);
@@ -219,20 +332,32 @@ pub fn read_exr(path: &Path) -> NdResult<ExrContents> {
     for i in 0..n {
         rgba.extend([rr[i], gg[i], bb[i], aa[i]]);
     }
-    Ok(ExrContents::Picture(Picture { width: size.width(), height: size.height(), rgba, depth: get("Z") }))
+    Ok(ExrContents::Picture(Picture {
+        width: size.width(),
+        height: size.height(),
+        rgba,
+        depth: get("Z"),
+    }))
 }
 
 /// Linear → sRGB transfer function.
 pub fn linear_to_srgb(x: f32) -> f32 {
     let x = x.clamp(0.0, 1.0);
-    if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
 }
 
 /// Writes a picture as an 8-bit sRGB PNG with straight (un-premultiplied) alpha.
 pub fn write_png(path: &Path, p: &Picture) -> NdResult<()> {
     let n = p.width * p.height;
     if p.rgba.len() != n * 4 || n == 0 {
-        return Err(NdError::Value { arg: "image".into(), message: format!("expected ({}, {}, 4) values", p.height, p.width) });
+        return Err(NdError::Value {
+            arg: "image".into(),
+            message: format!("expected ({}, {}, 4) values", p.height, p.width),
+        });
     }
     let mut bytes = Vec::with_capacity(n * 4);
     for px in p.rgba.chunks_exact(4) {
@@ -244,8 +369,15 @@ pub fn write_png(path: &Path, p: &Picture) -> NdResult<()> {
         bytes.push((a * 255.0 + 0.5) as u8);
     }
     write_atomically(path, |tmp| {
-        image::save_buffer_with_format(tmp, &bytes, p.width as u32, p.height as u32, image::ColorType::Rgba8, image::ImageFormat::Png)
-            .map_err(|e| e.to_string())
+        image::save_buffer_with_format(
+            tmp,
+            &bytes,
+            p.width as u32,
+            p.height as u32,
+            image::ColorType::Rgba8,
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| e.to_string())
     })
 }
 
@@ -259,10 +391,14 @@ mod tests {
             dim,
             shape,
             rgba: (0..cells * 4).map(|i| (i % 7) as f32 * 0.125).collect(),
-            depth: (0..cells).map(|i| if i % 3 == 0 { f32::INFINITY } else { i as f32 }).collect(),
+            depth: (0..cells)
+                .map(|i| if i % 3 == 0 { f32::INFINITY } else { i as f32 })
+                .collect(),
             normal: (0..cells * dim).map(|i| (i % 5) as f32 - 2.0).collect(),
             object_id: (0..cells).map(|i| (i % 4) as i32 - 1).collect(),
-            primitive_id: (0..cells).map(|i| if i % 4 == 0 { -1 } else { (i as i64) << 20 }).collect(),
+            primitive_id: (0..cells)
+                .map(|i| if i % 4 == 0 { -1 } else { (i as i64) << 20 })
+                .collect(),
         }
     }
 
@@ -270,7 +406,12 @@ mod tests {
     fn retinas_round_trip_through_exr_in_every_dimension() {
         let dir = std::env::temp_dir().join(format!("ndtrace-files-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        for (dim, shape) in [(2, vec![5]), (3, vec![3, 4]), (4, vec![2, 3, 4]), (5, vec![2, 2, 3, 4])] {
+        for (dim, shape) in [
+            (2, vec![5]),
+            (3, vec![3, 4]),
+            (4, vec![2, 3, 4]),
+            (5, vec![2, 2, 3, 4]),
+        ] {
             let r = retina(dim, shape);
             let path = dir.join(format!("r{dim}.exr"));
             write_retina_exr(&path, &r, Some("camera text")).unwrap();
@@ -285,25 +426,47 @@ mod tests {
         // Writing over an existing file replaces it only on success.
         let path = dir.join("keep.exr");
         std::fs::write(&path, b"precious").unwrap();
-        let bad = Picture { width: 2, height: 2, rgba: vec![0.0; 3], depth: None };
+        let bad = Picture {
+            width: 2,
+            height: 2,
+            rgba: vec![0.0; 3],
+            depth: None,
+        };
         assert!(write_picture_exr(&path, &bad).is_err());
         assert_eq!(std::fs::read(&path).unwrap(), b"precious");
-        assert!(std::fs::read_dir(&dir).unwrap().all(|e| !e.unwrap().file_name().to_string_lossy().contains(".tmp-")));
+        assert!(std::fs::read_dir(&dir).unwrap().all(|e| !e
+            .unwrap()
+            .file_name()
+            .to_string_lossy()
+            .contains(".tmp-")));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
     fn unreadable_files_are_clear_errors() {
-        let e = read_exr(Path::new("/nonexistent/x.exr")).unwrap_err().to_string();
-        assert!(e.contains("/nonexistent/x.exr") && e.contains("cannot read"), "{e}");
+        let e = read_exr(Path::new("/nonexistent/x.exr"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("/nonexistent/x.exr") && e.contains("cannot read"),
+            "{e}"
+        );
         let p = std::env::temp_dir().join(format!("ndtrace-notexr-{}.exr", std::process::id()));
         std::fs::write(&p, b"hello").unwrap();
         let e = read_exr(&p).unwrap_err().to_string();
         assert!(e.contains("not a readable OpenEXR file"), "{e}");
         std::fs::remove_file(&p).unwrap();
-        let e = write_png(Path::new("/nonexistent/dir/x.png"), &Picture { width: 1, height: 1, rgba: vec![0.0; 4], depth: None })
-            .unwrap_err()
-            .to_string();
+        let e = write_png(
+            Path::new("/nonexistent/dir/x.png"),
+            &Picture {
+                width: 1,
+                height: 1,
+                rgba: vec![0.0; 4],
+                depth: None,
+            },
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("does not exist"), "{e}");
     }
 

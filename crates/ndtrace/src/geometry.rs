@@ -76,7 +76,11 @@ pub fn generalized_cross<const N: usize>(edges: &[Vector<N>]) -> Vector<N> {
     }
     // Expand along the last column: N_i = (−1)^(i+N) · det(minor without row i, column N).
     std::array::from_fn(|i| {
-        let sign = if (i + N - 1).is_multiple_of(2) { 1.0 } else { -1.0 };
+        let sign = if (i + N - 1).is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
         sign * det_block(&minor(&e, N, i, N - 1), N - 1)
     })
 }
@@ -120,7 +124,10 @@ fn gram<const N: usize>(e: &[Vector<N>]) -> Matrix<N> {
 /// `V_K = √det(G) / K!` with G the Gram matrix of the edges `x_k − x_0`.
 pub fn gram_volume<const N: usize>(points: &[Vector<N>]) -> f64 {
     let k = points.len() - 1;
-    assert!((1..=N).contains(&k), "a K-simplex in R^N needs 2..=N+1 points");
+    assert!(
+        (1..=N).contains(&k),
+        "a K-simplex in R^N needs 2..=N+1 points"
+    );
     let mut e = [[0.0; N]; N];
     edges(points, &mut e[..k]);
     det_block_in_place(&mut gram(&e[..k]), k).max(0.0).sqrt() / factorial(k)
@@ -148,7 +155,10 @@ impl<const N: usize> Hyperplane<N> {
 pub fn hyperplane<const N: usize>(points: &[Vector<N>]) -> Result<Hyperplane<N>, Degenerate> {
     assert_eq!(points.len(), N, "a hyperplane needs N points");
     let normal = unit_cross(points).ok_or(Degenerate::Simplex)?;
-    Ok(Hyperplane { normal, offset: dot(&normal, &points[0]) })
+    Ok(Hyperplane {
+        normal,
+        offset: dot(&normal, &points[0]),
+    })
 }
 
 /// Unit edges `(x_k − x_0)/|x_k − x_0|` of a simplex, or `None` if an edge has zero (or
@@ -202,7 +212,10 @@ pub fn barycentric<const N: usize>(
     out: &mut [f64],
 ) -> Result<(), Degenerate> {
     let k = points.len() - 1;
-    assert!(k <= N && out.len() > k, "barycentric: K ≤ N and room for K+1 coordinates");
+    assert!(
+        k <= N && out.len() > k,
+        "barycentric: K ≤ N and room for K+1 coordinates"
+    );
     if k == 0 {
         out[0] = 1.0;
         return Ok(());
@@ -240,7 +253,9 @@ pub fn barycentric<const N: usize>(
 /// x_0), and 0 when the hyperplane is degenerate.
 pub fn side<const N: usize>(x: &Vector<N>, points: &[Vector<N>]) -> i8 {
     assert_eq!(points.len(), N, "a hyperplane needs N points");
-    let Some(n) = unit_cross(points) else { return 0 };
+    let Some(n) = unit_cross(points) else {
+        return 0;
+    };
     // sign V_N = sign(N · (x − x_0)); compared with |x − x_0| to be scale-free.
     let d = sub(x, &points[0]);
     let m = d.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -324,11 +339,18 @@ mod tests {
             let n = generalized_cross(&e);
             // Orthogonal to each edge.
             for edge in &e {
-                assert!(close(dot(&n, edge), 0.0, norm(&n) * norm(edge)), "N={N}: not orthogonal");
+                assert!(
+                    close(dot(&n, edge), 0.0, norm(&n) * norm(edge)),
+                    "N={N}: not orthogonal"
+                );
             }
             // |N|² equals the Gram determinant ((N−1)!·V_{N−1})².
             let g = det_block(&gram(&e), N - 1);
-            assert!(close(dot(&n, &n), g, g), "N={N}: |N|²={} Gram={g}", dot(&n, &n));
+            assert!(
+                close(dot(&n, &n), g, g),
+                "N={N}: |N|²={} Gram={g}",
+                dot(&n, &n)
+            );
             let x0 = random_vector::<N>(&mut r, 3.0);
             let mut pts = vec![x0];
             pts.extend(e.iter().map(|x| add(x, &x0)));
@@ -343,13 +365,19 @@ mod tests {
                 m[r_][N - 1] = n[r_];
             }
             let d = det(&m);
-            assert!(d > 0.0 && close(d, dot(&n, &n), d), "N={N}: det[edges|N]={d}");
+            assert!(
+                d > 0.0 && close(d, dot(&n, &n), d),
+                "N={N}: det[edges|N]={d}"
+            );
             // det[edges | v] = v·N for any v (the expansion that defines eq. 6).
             let v = random_vector::<N>(&mut r, 1.0);
             for r_ in 0..N {
                 m[r_][N - 1] = v[r_];
             }
-            assert!(close(det(&m), dot(&v, &n), d.abs() + 1.0), "N={N}: expansion");
+            assert!(
+                close(det(&m), dot(&v, &n), d.abs() + 1.0),
+                "N={N}: expansion"
+            );
             // Eq. 8: N(a)·N(b) = det[a_i · b_j].
             let f: Vec<Vector<N>> = random_points(&mut r, N - 1, 2.0);
             let nf = generalized_cross(&f);
@@ -360,7 +388,10 @@ mod tests {
                 }
             }
             let want = det_block(&ab, N - 1);
-            assert!(close(dot(&n, &nf), want, norm(&n) * norm(&nf)), "N={N}: eq. 8");
+            assert!(
+                close(dot(&n, &nf), want, norm(&n) * norm(&nf)),
+                "N={N}: eq. 8"
+            );
         }
     }
 
@@ -370,15 +401,19 @@ mod tests {
     }
 
     fn unit_edges_give_last_axis<const N: usize>() {
-        let e: Vec<Vector<N>> =
-            (0..N - 1).map(|k| std::array::from_fn(|i| if i == k { 1.0 } else { 0.0 })).collect();
+        let e: Vec<Vector<N>> = (0..N - 1)
+            .map(|k| std::array::from_fn(|i| if i == k { 1.0 } else { 0.0 }))
+            .collect();
         let mut want = [0.0; N];
         want[N - 1] = 1.0;
         assert_eq!(generalized_cross(&e), want, "N={N}");
         // Standard simplex: +1/N!.
         let mut pts = vec![[0.0; N]];
         pts.extend((0..N).map(|k| std::array::from_fn(|i| if i == k { 1.0 } else { 0.0 })));
-        assert!((signed_volume(&pts) - 1.0 / factorial(N)).abs() < 1e-15, "N={N}");
+        assert!(
+            (signed_volume(&pts) - 1.0 / factorial(N)).abs() < 1e-15,
+            "N={N}"
+        );
         // Dependent edges give the zero normal and a degenerate hyperplane.
         let mut dep = e.clone();
         if N > 2 {
@@ -398,7 +433,10 @@ mod tests {
         for_each_dim!(unit_edges_give_last_axis);
         assert_eq!(generalized_cross::<2>(&[[3.0, 5.0]]), [-5.0, 3.0]);
         // 3D: the familiar cross product (eq. 9).
-        assert_eq!(generalized_cross::<3>(&[[1., 2., 3.], [4., 5., 6.]]), [-3., 6., -3.]);
+        assert_eq!(
+            generalized_cross::<3>(&[[1., 2., 3.], [4., 5., 6.]]),
+            [-3., 6., -3.]
+        );
     }
 
     fn volume_identities<const N: usize>() {
@@ -420,9 +458,15 @@ mod tests {
             assert!(close(signed_volume(&moved), v, v.abs()), "N={N}: rotation");
             let f = random_reflection::<N>(&mut r);
             let refl: Vec<Vector<N>> = pts.iter().map(|x| mat_vec(&f, x)).collect();
-            assert!(close(signed_volume(&refl), -v, v.abs()), "N={N}: reflection");
+            assert!(
+                close(signed_volume(&refl), -v, v.abs()),
+                "N={N}: reflection"
+            );
             // |V_N| equals the Gram volume for K = N (eq. 4).
-            assert!(close(gram_volume(&pts), v.abs(), v.abs()), "N={N}: gram K=N");
+            assert!(
+                close(gram_volume(&pts), v.abs(), v.abs()),
+                "N={N}: gram K=N"
+            );
             // Gram volumes of K-faces are rotation invariant and match the cross product for K = N−1.
             for k in 1..=N {
                 let face = &pts[..=k];
@@ -431,7 +475,11 @@ mod tests {
                 assert!(close(gram_volume(moved_face), a, a), "N={N} K={k}");
             }
             let n = simplex_normal(&pts[..N]);
-            assert!(close(norm(&n), factorial(N - 1) * gram_volume(&pts[..N]), norm(&n)));
+            assert!(close(
+                norm(&n),
+                factorial(N - 1) * gram_volume(&pts[..N]),
+                norm(&n)
+            ));
         }
     }
 
@@ -443,8 +491,9 @@ mod tests {
     fn exact_integer_volumes<const N: usize>() {
         let mut r = rng(300 + N as u64);
         for trial in 0..300 {
-            let mut ip: Vec<[i64; N]> =
-                (0..=N).map(|_| std::array::from_fn(|_| r.random_range(-3..=3))).collect();
+            let mut ip: Vec<[i64; N]> = (0..=N)
+                .map(|_| std::array::from_fn(|_| r.random_range(-3..=3)))
+                .collect();
             if trial % 10 == 0 {
                 // Make a third of these affinely dependent: x_N = x_1 + x_2 − x_0 (or x_1 = x_0).
                 if N >= 2 {
@@ -453,16 +502,25 @@ mod tests {
             }
             let exact = det_bareiss(
                 &(0..N)
-                    .map(|row| (0..N).map(|c| (ip[c + 1][row] - ip[0][row]) as i128).collect())
+                    .map(|row| {
+                        (0..N)
+                            .map(|c| (ip[c + 1][row] - ip[0][row]) as i128)
+                            .collect()
+                    })
                     .collect::<Vec<Vec<i128>>>(),
             );
-            let pts: Vec<Vector<N>> =
-                ip.iter().map(|p| std::array::from_fn(|i| p[i] as f64)).collect();
+            let pts: Vec<Vector<N>> = ip
+                .iter()
+                .map(|p| std::array::from_fn(|i| p[i] as f64))
+                .collect();
             let w = signed_volume(&pts) * factorial(N);
             assert_eq!(w.round() as i128, exact, "N={N}: f64 {w} vs exact {exact}");
             // Hadamard's bound on |det| sets the scale of f64 rounding.
             let hadamard: f64 = (1..=N).map(|c| norm(&sub(&pts[c], &pts[0]))).product();
-            assert!((w - exact as f64).abs() <= 1e-12 * hadamard.max(1.0), "N={N}: {w} vs {exact}");
+            assert!(
+                (w - exact as f64).abs() <= 1e-12 * hadamard.max(1.0),
+                "N={N}: {w} vs {exact}"
+            );
             if exact == 0 {
                 assert!(w.abs() <= 1e-12 * hadamard.max(1.0));
             } else {
@@ -559,7 +617,10 @@ mod tests {
             for i in 0..=N {
                 let mut q = pts.clone();
                 q[i] = x;
-                assert!(close(t[i], signed_volume(&q) / vol, 1.0), "N={N}: t_i as volume ratio");
+                assert!(
+                    close(t[i], signed_volume(&q) / vol, 1.0),
+                    "N={N}: t_i as volume ratio"
+                );
             }
             inside_hits += inside as usize;
         }
@@ -574,7 +635,10 @@ mod tests {
             }
             let mut t = [0.0; 9];
             barycentric(&x, &pts, &mut t).unwrap();
-            assert!(t[..=N].iter().all(|&ti| ti >= -1e-12), "N={N}: sampled point outside");
+            assert!(
+                t[..=N].iter().all(|&ti| ti >= -1e-12),
+                "N={N}: sampled point outside"
+            );
         }
         let _ = inside_hits;
     }
@@ -630,7 +694,10 @@ mod tests {
             let b = random_vector::<N>(&mut r, 3.0);
             let t = clip_segment(&a, &b, &pts).unwrap();
             let x = add_scaled(&a, t, &sub(&b, &a));
-            assert!(close(plane.distance(&x), 0.0, 1.0 + t.abs()), "N={N}: clip point on plane");
+            assert!(
+                close(plane.distance(&x), 0.0, 1.0 + t.abs()),
+                "N={N}: clip point on plane"
+            );
             // The segment crosses iff its ends are on opposite sides.
             let crosses = side(&a, &pts) * side(&b, &pts) < 0;
             assert_eq!(crosses, (0.0..=1.0).contains(&t), "N={N}: t={t}");
@@ -641,7 +708,10 @@ mod tests {
             // A direction inside the hyperplane is parallel.
             let along = sub(&pts[1], &pts[0]);
             assert_eq!(ray_hyperplane(&a, &along, &pts), Err(Degenerate::Parallel));
-            assert_eq!(clip_segment(&a, &add(&a, &along), &pts), Err(Degenerate::Parallel));
+            assert_eq!(
+                clip_segment(&a, &add(&a, &along), &pts),
+                Err(Degenerate::Parallel)
+            );
             assert_eq!(clip_segment(&a, &a, &pts), Err(Degenerate::Parallel));
         }
     }
@@ -665,7 +735,10 @@ mod tests {
             let want = generalized_cross(&te);
             let got = transform_normal(&m, &n);
             for i in 0..N {
-                assert!(close(got[i], want[i], norm(&want)), "N={N} case {case}: {got:?} {want:?}");
+                assert!(
+                    close(got[i], want[i], norm(&want)),
+                    "N={N} case {case}: {got:?} {want:?}"
+                );
             }
             if case % 3 < 2 {
                 // Orthogonal: cof(R) = det(R)·R.
@@ -687,7 +760,10 @@ mod tests {
     fn degenerate_barycentric_is_reported() {
         let p = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0]];
         let mut t = [0.0; 3];
-        assert_eq!(barycentric(&[0.5, 0.0, 0.0], &p, &mut t), Err(Degenerate::Simplex));
+        assert_eq!(
+            barycentric(&[0.5, 0.0, 0.0], &p, &mut t),
+            Err(Degenerate::Simplex)
+        );
         let q = [[0.0, 0.0], [0.0, 0.0]];
         assert_eq!(hyperplane(&q), Err(Degenerate::Simplex));
         assert_eq!(gram_volume(&q), 0.0);

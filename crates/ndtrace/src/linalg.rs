@@ -67,9 +67,7 @@ pub fn mat_vec<const N: usize>(m: &Matrix<N>, v: &Vector<N>) -> Vector<N> {
 
 /// Matrix product a·b.
 pub fn mat_mul<const N: usize>(a: &Matrix<N>, b: &Matrix<N>) -> Matrix<N> {
-    std::array::from_fn(|i| {
-        std::array::from_fn(|j| (0..N).map(|k| a[i][k] * b[k][j]).sum())
-    })
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..N).map(|k| a[i][k] * b[k][j]).sum()))
 }
 
 /// Determinant of the leading `k × k` block of `m`, destroying it (LU with partial pivoting).
@@ -146,7 +144,11 @@ pub fn cofactor_matrix<const N: usize>(m: &Matrix<N>) -> Matrix<N> {
 /// Solves the leading `k × k` system `a·x = b` by Gaussian elimination with partial pivoting.
 /// Returns `None` when a pivot is exactly zero. Only the first `k` entries of the result are
 /// meaningful.
-pub fn solve_block<const N: usize>(mut a: Matrix<N>, mut b: Vector<N>, k: usize) -> Option<Vector<N>> {
+pub fn solve_block<const N: usize>(
+    mut a: Matrix<N>,
+    mut b: Vector<N>,
+    k: usize,
+) -> Option<Vector<N>> {
     for col in 0..k {
         let mut p = col;
         for r in col + 1..k {
@@ -188,7 +190,7 @@ pub fn factorial(n: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testutil::{for_each_dim, rng, random_matrix, random_rotation, random_vector};
+    use crate::testutil::{for_each_dim, random_matrix, random_rotation, random_vector, rng};
 
     fn det_and_solve_agree<const N: usize>() {
         let mut r = rng(N as u64);

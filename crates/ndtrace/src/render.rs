@@ -118,7 +118,11 @@ pub fn trace<const N: usize>(scene: &Scene<N>, progress: &Progress) -> NdResult<
     }
 }
 
-fn trace_with<const N: usize, F>(scene: &Scene<N>, progress: &Progress, accept: F) -> NdResult<Retina>
+fn trace_with<const N: usize, F>(
+    scene: &Scene<N>,
+    progress: &Progress,
+    accept: F,
+) -> NdResult<Retina>
 where
     F: Fn(u32) -> bool + Sync,
 {
@@ -138,71 +142,90 @@ where
         .zip(object_id.par_chunks_mut(CHUNK))
         .zip(primitive_id.par_chunks_mut(CHUNK))
         .enumerate()
-        .for_each(|(chunk, ((((rgba, depth), normal), object_id), primitive_id))| {
-            if progress.cancel.load(Ordering::Relaxed) {
-                return;
-            }
-            let mut offsets = Vec::with_capacity(samples * (N - 1));
-            let mut u = [0.0; N];
-            for c in 0..depth.len() {
-                let cell = chunk * CHUNK + c;
-                let mut rng = SplitMix::new(scene.render.seed, cell as u64);
-                sample_offsets(samples, N - 1, &mut rng, &mut offsets);
-                let mut color = [0.0f64; 3];
-                let mut covered = 0usize;
-                let mut nearest: Option<NearestHit<N>> = None;
-                for j in 0..samples {
-                    cam.retina_point(cell, &offsets[j * (N - 1)..(j + 1) * (N - 1)], &mut u);
-                    let ray = cam.ray(&u[..N - 1]);
-                    let Some(hit) = scene.bvh.closest_hit(&ray, 0.0, f64::INFINITY, &accept) else {
-                        continue;
-                    };
-                    covered += 1;
-                    let (obj, local) = scene.locate(hit.prim);
-                    let n = shading_normal(scene, &hit, obj, local, &ray);
-                    let c = match scene.render.mode {
-                        RenderMode::Shaded => shade(scene, &ray, &hit, obj, &n),
-                        RenderMode::Depth => {
-                            let d = cam.depth(&ray, hit.t);
-                            let g = 1.0 - 0.8 * ((d - depth_range.0) / (depth_range.1 - depth_range.0)).clamp(0.0, 1.0);
-                            [g; 3]
+        .for_each(
+            |(chunk, ((((rgba, depth), normal), object_id), primitive_id))| {
+                if progress.cancel.load(Ordering::Relaxed) {
+                    return;
+                }
+                let mut offsets = Vec::with_capacity(samples * (N - 1));
+                let mut u = [0.0; N];
+                for c in 0..depth.len() {
+                    let cell = chunk * CHUNK + c;
+                    let mut rng = SplitMix::new(scene.render.seed, cell as u64);
+                    sample_offsets(samples, N - 1, &mut rng, &mut offsets);
+                    let mut color = [0.0f64; 3];
+                    let mut covered = 0usize;
+                    let mut nearest: Option<NearestHit<N>> = None;
+                    for j in 0..samples {
+                        cam.retina_point(cell, &offsets[j * (N - 1)..(j + 1) * (N - 1)], &mut u);
+                        let ray = cam.ray(&u[..N - 1]);
+                        let Some(hit) = scene.bvh.closest_hit(&ray, 0.0, f64::INFINITY, &accept)
+                        else {
+                            continue;
+                        };
+                        covered += 1;
+                        let (obj, local) = scene.locate(hit.prim);
+                        let n = shading_normal(scene, &hit, obj, local, &ray);
+                        let c = match scene.render.mode {
+                            RenderMode::Shaded => shade(scene, &ray, &hit, obj, &n),
+                            RenderMode::Depth => {
+                                let d = cam.depth(&ray, hit.t);
+                                let g = 1.0
+                                    - 0.8
+                                        * ((d - depth_range.0) / (depth_range.1 - depth_range.0))
+                                            .clamp(0.0, 1.0);
+                                [g; 3]
+                            }
+                            RenderMode::Normal => {
+                                std::array::from_fn(|k| if k < N { 0.5 + 0.5 * n[k] } else { 0.5 })
+                            }
+                            RenderMode::PrimitiveId => id_color(hit.prim),
+                            RenderMode::Barycentric => {
+                                std::array::from_fn(|k| if k < N { hit.bary[k] } else { 0.0 })
+                            }
+                        };
+                        for k in 0..3 {
+                            color[k] += c[k];
                         }
-                        RenderMode::Normal => {
-                            std::array::from_fn(|k| if k < N { 0.5 + 0.5 * n[k] } else { 0.5 })
+                        let d = cam.depth(&ray, hit.t);
+                        if nearest.as_ref().is_none_or(|h| d < h.depth) {
+                            nearest = Some(NearestHit {
+                                depth: d,
+                                normal: n,
+                                object: obj as i32,
+                                primitive: local as i64,
+                            });
                         }
-                        RenderMode::PrimitiveId => id_color(hit.prim),
-                        RenderMode::Barycentric => {
-                            std::array::from_fn(|k| if k < N { hit.bary[k] } else { 0.0 })
-                        }
-                    };
+                    }
+                    let inv = 1.0 / samples as f64;
                     for k in 0..3 {
-                        color[k] += c[k];
+                        rgba[c * 4 + k] = (color[k] * inv) as f32;
                     }
-                    let d = cam.depth(&ray, hit.t);
-                    if nearest.as_ref().is_none_or(|h| d < h.depth) {
-                        nearest = Some(NearestHit { depth: d, normal: n, object: obj as i32, primitive: local as i64 });
+                    rgba[c * 4 + 3] = (covered as f64 * inv) as f32;
+                    if let Some(h) = nearest {
+                        depth[c] = h.depth as f32;
+                        for k in 0..N {
+                            normal[c * N + k] = h.normal[k] as f32;
+                        }
+                        object_id[c] = h.object;
+                        primitive_id[c] = h.primitive;
                     }
                 }
-                let inv = 1.0 / samples as f64;
-                for k in 0..3 {
-                    rgba[c * 4 + k] = (color[k] * inv) as f32;
-                }
-                rgba[c * 4 + 3] = (covered as f64 * inv) as f32;
-                if let Some(h) = nearest {
-                    depth[c] = h.depth as f32;
-                    for k in 0..N {
-                        normal[c * N + k] = h.normal[k] as f32;
-                    }
-                    object_id[c] = h.object;
-                    primitive_id[c] = h.primitive;
-                }
-            }
-            progress.done.fetch_add(depth.len(), Ordering::Relaxed);
-        });
+                progress.done.fetch_add(depth.len(), Ordering::Relaxed);
+            },
+        );
     if progress.cancel.load(Ordering::Relaxed) {
         return Err(NdError::Cancelled);
     }
-    Ok(Retina { dim: N, shape: cam.numpy_shape(), rgba, depth, normal, object_id, primitive_id })
+    Ok(Retina {
+        dim: N,
+        shape: cam.numpy_shape(),
+        rgba,
+        depth,
+        normal,
+        object_id,
+        primitive_id,
+    })
 }
 
 /// Near and far depth of the scene's bounding sphere, for the `depth` debug mode.
@@ -225,7 +248,11 @@ fn depth_range<const N: usize>(scene: &Scene<N>) -> (f64, f64) {
     let view = scene.camera.axis(N - 1);
     let d = dot(&sub(&centre, &scene.camera.position), &view);
     let (near, far) = ((d - radius).max(0.0), d + radius);
-    if far > near { (near, far) } else { (near, near + 1.0) }
+    if far > near {
+        (near, far)
+    } else {
+        (near, near + 1.0)
+    }
 }
 
 /// A distinct, stable colour per global primitive id.
@@ -237,7 +264,13 @@ fn id_color(id: u32) -> [f64; 3] {
 
 /// The unit shading normal: flat (eq. 6) or interpolated from vertex normals with the hit's
 /// barycentric coordinates; turned toward the viewer for two-sided lighting.
-fn shading_normal<const N: usize>(scene: &Scene<N>, hit: &Hit<N>, obj: usize, local: usize, ray: &Ray<N>) -> Vector<N> {
+fn shading_normal<const N: usize>(
+    scene: &Scene<N>,
+    hit: &Hit<N>,
+    obj: usize,
+    local: usize,
+    ray: &Ray<N>,
+) -> Vector<N> {
     let flat = scene.flat_normals[hit.prim as usize];
     let mut n = flat;
     let o = &scene.objects[obj];
@@ -260,7 +293,13 @@ fn shading_normal<const N: usize>(scene: &Scene<N>, hit: &Hit<N>, obj: usize, lo
 
 /// N-D Lambert + Blinn–Phong with hard shadows (course notes Part II(B)): the intensity of a
 /// light is the dot product of the unit normal with the unit vector toward it, clamped at 0.
-fn shade<const N: usize>(scene: &Scene<N>, ray: &Ray<N>, hit: &Hit<N>, obj: usize, n: &Vector<N>) -> [f64; 3] {
+fn shade<const N: usize>(
+    scene: &Scene<N>,
+    ray: &Ray<N>,
+    hit: &Hit<N>,
+    obj: usize,
+    n: &Vector<N>,
+) -> [f64; 3] {
     let m = &scene.objects[obj].material;
     let x = add_scaled(&ray.origin, hit.t, &ray.dir);
     let dl = norm(&ray.dir);
@@ -271,13 +310,21 @@ fn shade<const N: usize>(scene: &Scene<N>, ray: &Ray<N>, hit: &Hit<N>, obj: usiz
     for light in &scene.lights {
         let (l, dist, color, atten) = match light {
             Light::Directional { direction, color } => (*direction, f64::INFINITY, color, 1.0),
-            Light::Point { position, color, falloff } => {
+            Light::Point {
+                position,
+                color,
+                falloff,
+            } => {
                 let d = sub(position, &x);
                 let dist = norm(&d);
                 if !(dist > 0.0) {
                     continue;
                 }
-                let atten = if *falloff == 0.0 { 1.0 } else { dist.powf(-falloff) };
+                let atten = if *falloff == 0.0 {
+                    1.0
+                } else {
+                    dist.powf(-falloff)
+                };
                 (scale(&d, 1.0 / dist), dist, color, atten)
             }
         };
@@ -297,9 +344,17 @@ fn shade<const N: usize>(scene: &Scene<N>, ray: &Ray<N>, hit: &Hit<N>, obj: usiz
         let h = {
             let s = add_scaled(&l, 1.0, &v);
             let len = norm(&s);
-            if len > 0.0 { scale(&s, 1.0 / len) } else { l }
+            if len > 0.0 {
+                scale(&s, 1.0 / len)
+            } else {
+                l
+            }
         };
-        let spec = if m.specular.iter().any(|&s| s > 0.0) { dot(n, &h).max(0.0).powf(m.shininess) } else { 0.0 };
+        let spec = if m.specular.iter().any(|&s| s > 0.0) {
+            dot(n, &h).max(0.0).powf(m.shininess)
+        } else {
+            0.0
+        };
         for k in 0..3 {
             c[k] += atten * color[k] * (m.diffuse[k] * m.color[k] * ndl + m.specular[k] * spec);
         }
@@ -317,7 +372,8 @@ mod tests {
         let mut out = vec![];
         sample_offsets(16, 3, &mut rng, &mut out);
         for k in 0..3 {
-            let mut strata: Vec<usize> = (0..16).map(|j| (out[j * 3 + k] * 16.0) as usize).collect();
+            let mut strata: Vec<usize> =
+                (0..16).map(|j| (out[j * 3 + k] * 16.0) as usize).collect();
             strata.sort();
             assert_eq!(strata, (0..16).collect::<Vec<_>>());
         }

@@ -62,7 +62,10 @@ pub fn simplex_boundary<const N: usize>() -> Mesh<N> {
             idx
         })
         .collect();
-    let mut mesh = Mesh { vertices, simplices };
+    let mut mesh = Mesh {
+        vertices,
+        simplices,
+    };
     orient_outward(&mut mesh, [0.0; N]);
     mesh
 }
@@ -94,7 +97,10 @@ pub fn cross_polytope<const N: usize>() -> Mesh<N> {
     let simplices = (0..1u32 << N)
         .map(|signs| std::array::from_fn(|i| 2 * i as u32 + ((signs >> i) & 1)))
         .collect();
-    let mut mesh = Mesh { vertices, simplices };
+    let mut mesh = Mesh {
+        vertices,
+        simplices,
+    };
     orient_outward(&mut mesh, [0.0; N]);
     mesh
 }
@@ -121,7 +127,10 @@ pub fn cross_polytope<const N: usize>() -> Mesh<N> {
 /// # Panics
 /// If the vertex count does not fit in `u32` (or the simplex count in `usize`).
 pub fn sphere<const N: usize>(subdivisions: u32) -> Mesh<N> {
-    assert!(subdivisions < 31, "sphere: subdivisions = {subdivisions} is far too large");
+    assert!(
+        subdivisions < 31,
+        "sphere: subdivisions = {subdivisions} is far too large"
+    );
     cube_lattice_surface::<N>(1 << subdivisions, true)
 }
 
@@ -152,7 +161,11 @@ pub fn vertex_normals<const N: usize>(mesh: &Mesh<N>) -> Vec<Vector<N>> {
     }
     acc.par_iter_mut().for_each(|a| {
         let len = norm(a);
-        *a = if len > 0.0 { scale(a, 1.0 / len) } else { [0.0; N] };
+        *a = if len > 0.0 {
+            scale(a, 1.0 / len)
+        } else {
+            [0.0; N]
+        };
     });
     acc
 }
@@ -169,7 +182,10 @@ pub fn orient_outward<const N: usize>(mesh: &mut Mesh<N>, center: Vector<N>) {
     mesh.simplices.par_iter_mut().for_each(|idx| {
         let p: [Vector<N>; N] = std::array::from_fn(|k| vertices[idx[k] as usize]);
         let n = simplex_normal(&p);
-        let centroid = scale(&p.iter().fold([0.0; N], |acc, x| add(&acc, x)), 1.0 / N as f64);
+        let centroid = scale(
+            &p.iter().fold([0.0; N], |acc, x| add(&acc, x)),
+            1.0 / N as f64,
+        );
         if dot(&n, &sub(&centroid, &center)) < 0.0 {
             idx.swap(0, 1);
         }
@@ -215,7 +231,9 @@ impl<const N: usize> SurfaceLattice<N> {
     #[inline]
     fn index(&self, g: &[u32; N]) -> u32 {
         let k = self.k;
-        let a = (0..N).find(|&b| g[b] == 0 || g[b] == k).expect("point not on the boundary");
+        let a = (0..N)
+            .find(|&b| g[b] == 0 || g[b] == k)
+            .expect("point not on the boundary");
         let mut idx = 0u32;
         for b in 0..N {
             if b < a {
@@ -261,7 +279,9 @@ fn kuhn_chains<const N: usize>() -> Vec<([usize; N], bool)> {
         let odd = inversions.filter(|&(i, j)| perm[i] > perm[j]).count() % 2 == 1;
         out.push((chain, odd));
         // Next permutation in lexicographic order.
-        let Some(i) = (1..m).rev().find(|&i| perm[i - 1] < perm[i]) else { break };
+        let Some(i) = (1..m).rev().find(|&i| perm[i - 1] < perm[i]) else {
+            break;
+        };
         let j = (i..m).rev().find(|&j| perm[j] > perm[i - 1]).unwrap();
         perm.swap(i - 1, j);
         perm[i..].reverse();
@@ -283,7 +303,11 @@ fn cube_lattice_surface<const N: usize>(k: u32, project: bool) -> Mesh<N> {
                 let g = lattice.point(a, side, local);
                 debug_assert_eq!(lattice.index(&g) as usize, vertices.len());
                 let x: Vector<N> = std::array::from_fn(|b| f64::from(g[b]) * step - 1.0);
-                vertices.push(if project { scale(&x, 1.0 / norm(&x)) } else { x });
+                vertices.push(if project {
+                    scale(&x, 1.0 / norm(&x))
+                } else {
+                    x
+                });
             }
         }
     }
@@ -341,7 +365,10 @@ fn cube_lattice_surface<const N: usize>(k: u32, project: bool) -> Mesh<N> {
             }
         }
     }
-    Mesh { vertices, simplices }
+    Mesh {
+        vertices,
+        simplices,
+    }
 }
 
 #[cfg(test)]
@@ -363,7 +390,10 @@ mod tests {
             ("simplex".to_string(), simplex_boundary::<N>()),
             ("hypercube".to_string(), hypercube::<N>()),
             ("cross-polytope".to_string(), cross_polytope::<N>()),
-            (format!("sphere({sphere_subdivisions})"), sphere::<N>(sphere_subdivisions)),
+            (
+                format!("sphere({sphere_subdivisions})"),
+                sphere::<N>(sphere_subdivisions),
+            ),
         ]
     }
 
@@ -406,10 +436,17 @@ mod tests {
                 j += 1;
             }
             if j - i != 2 {
-                return Err(format!("face {:?} shared by {} simplices", faces[i].0, j - i));
+                return Err(format!(
+                    "face {:?} shared by {} simplices",
+                    faces[i].0,
+                    j - i
+                ));
             }
             if faces[i].1 == faces[i + 1].1 {
-                return Err(format!("face {:?}: neighbours induce the same orientation", faces[i].0));
+                return Err(format!(
+                    "face {:?}: neighbours induce the same orientation",
+                    faces[i].0
+                ));
             }
             i = j;
         }
@@ -419,16 +456,18 @@ mod tests {
     /// No degenerate simplex, and every normal points away from the origin. Reports the first
     /// offending simplex (checked in parallel: the N = 8 meshes have 80640 simplices).
     fn check_outward<const N: usize>(mesh: &Mesh<N>) -> Result<(), String> {
-        let bad = (0..mesh.simplices.len()).into_par_iter().find_map_first(|s| {
-            let p = mesh.simplex_points(s);
-            let Ok(plane) = hyperplane(&p) else {
-                return Some(format!("simplex {s} is degenerate: {p:?}"));
-            };
-            let centroid = p.iter().fold([0.0; N], |acc, x| add(&acc, x));
-            // `hyperplane`'s unit normal has the direction of `simplex_normal` (eq. 6).
-            (!(dot(&plane.normal, &centroid) > 0.0))
-                .then(|| format!("simplex {s} points inward: {p:?}"))
-        });
+        let bad = (0..mesh.simplices.len())
+            .into_par_iter()
+            .find_map_first(|s| {
+                let p = mesh.simplex_points(s);
+                let Ok(plane) = hyperplane(&p) else {
+                    return Some(format!("simplex {s} is degenerate: {p:?}"));
+                };
+                let centroid = p.iter().fold([0.0; N], |acc, x| add(&acc, x));
+                // `hyperplane`'s unit normal has the direction of `simplex_normal` (eq. 6).
+                (!(dot(&plane.normal, &centroid) > 0.0))
+                    .then(|| format!("simplex {s} points inward: {p:?}"))
+            });
         bad.map_or(Ok(()), Err)
     }
 
@@ -460,14 +499,29 @@ mod tests {
     fn counts<const N: usize>() {
         let fact = factorial(N - 1) as usize;
         let m = simplex_boundary::<N>();
-        assert_eq!((m.vertices.len(), m.simplices.len()), (N + 1, N + 1), "N={N} simplex");
+        assert_eq!(
+            (m.vertices.len(), m.simplices.len()),
+            (N + 1, N + 1),
+            "N={N} simplex"
+        );
         let m = hypercube::<N>();
-        assert_eq!((m.vertices.len(), m.simplices.len()), (1 << N, 2 * N * fact), "N={N} cube");
+        assert_eq!(
+            (m.vertices.len(), m.simplices.len()),
+            (1 << N, 2 * N * fact),
+            "N={N} cube"
+        );
         for v in &m.vertices {
-            assert!(v.iter().all(|&c| c == 1.0 || c == -1.0), "N={N}: cube vertex {v:?}");
+            assert!(
+                v.iter().all(|&c| c == 1.0 || c == -1.0),
+                "N={N}: cube vertex {v:?}"
+            );
         }
         let m = cross_polytope::<N>();
-        assert_eq!((m.vertices.len(), m.simplices.len()), (2 * N, 1 << N), "N={N} cross");
+        assert_eq!(
+            (m.vertices.len(), m.simplices.len()),
+            (2 * N, 1 << N),
+            "N={N} cross"
+        );
         for s in 0..=COUNT_SUBDIVISIONS[N] {
             let k = 1usize << s;
             let m = sphere::<N>(s);
@@ -477,10 +531,12 @@ mod tests {
             assert_eq!(m.simplices.len(), simps, "N={N} s={s}: sphere simplices");
             // Exact deduplication: every vertex is used and no two coincide.
             let mut used = vec![false; m.vertices.len()];
-            m.simplices.iter().flatten().for_each(|&v| used[v as usize] = true);
+            m.simplices
+                .iter()
+                .flatten()
+                .for_each(|&v| used[v as usize] = true);
             assert!(used.iter().all(|&u| u), "N={N} s={s}: unused vertex");
-            let mut bits: Vec<[u64; N]> =
-                m.vertices.iter().map(|v| v.map(f64::to_bits)).collect();
+            let mut bits: Vec<[u64; N]> = m.vertices.iter().map(|v| v.map(f64::to_bits)).collect();
             bits.sort_unstable();
             bits.dedup();
             assert_eq!(bits.len(), verts, "N={N} s={s}: duplicate vertices");
@@ -542,19 +598,34 @@ mod tests {
         let mut r = rng(0x5ba9e5 + N as u64);
         // (Meshes over 50000 simplices, the N = 8 hypercube and sphere(0), are skipped for speed.)
         let shapes = all_shapes::<N>(1.min(CLOSED_SUBDIVISIONS[N]));
-        for (name, mesh) in shapes.into_iter().filter(|(_, m)| m.simplices.len() <= 50_000) {
+        for (name, mesh) in shapes
+            .into_iter()
+            .filter(|(_, m)| m.simplices.len() <= 50_000)
+        {
             let s = r.random_range(0..mesh.simplices.len());
             let mut flipped = mesh.clone();
             flipped.simplices[s].swap(0, N - 1);
-            assert!(check_closed_oriented(&flipped).is_err(), "N={N} {name}: flip undetected");
-            assert!(check_outward(&flipped).is_err(), "N={N} {name}: inward undetected");
+            assert!(
+                check_closed_oriented(&flipped).is_err(),
+                "N={N} {name}: flip undetected"
+            );
+            assert!(
+                check_outward(&flipped).is_err(),
+                "N={N} {name}: inward undetected"
+            );
             let mut holed = mesh.clone();
             holed.simplices.swap_remove(s);
-            assert!(check_closed_oriented(&holed).is_err(), "N={N} {name}: hole undetected");
+            assert!(
+                check_closed_oriented(&holed).is_err(),
+                "N={N} {name}: hole undetected"
+            );
             let mut flat = mesh.clone();
             let i = flat.simplices[s][0] as usize;
             flat.vertices[i] = flat.vertices[flat.simplices[s][1] as usize];
-            assert!(check_outward(&flat).is_err(), "N={N} {name}: degeneracy undetected");
+            assert!(
+                check_outward(&flat).is_err(),
+                "N={N} {name}: degeneracy undetected"
+            );
         }
     }
 
@@ -567,9 +638,15 @@ mod tests {
         let n = N as f64;
         let close = |got: f64, want: f64| (got - want).abs() <= 1e-10 * want;
         let cube = enclosed_volume(&hypercube::<N>());
-        assert!(close(cube, 2f64.powi(N as i32)), "N={N}: cube volume {cube}");
+        assert!(
+            close(cube, 2f64.powi(N as i32)),
+            "N={N}: cube volume {cube}"
+        );
         let cross = enclosed_volume(&cross_polytope::<N>());
-        assert!(close(cross, 2f64.powi(N as i32) / factorial(N)), "N={N}: cross {cross}");
+        assert!(
+            close(cross, 2f64.powi(N as i32) / factorial(N)),
+            "N={N}: cross {cross}"
+        );
         // Regular simplex with circumradius 1: V = (N+1)^((N+1)/2) / (N!·N^(N/2)).
         let simplex = enclosed_volume(&simplex_boundary::<N>());
         let want = (n + 1.0).powf((n + 1.0) / 2.0) / (factorial(N) * n.powf(n / 2.0));
@@ -586,7 +663,10 @@ mod tests {
                 assert!(close(v, want), "N={N}: sphere(0) {v} vs {want}");
             }
             let err = (ball - v) / ball;
-            assert!(err > 0.0, "N={N} s={s}: inscribed volume {v} exceeds the ball's {ball}");
+            assert!(
+                err > 0.0,
+                "N={N} s={s}: inscribed volume {v} exceeds the ball's {ball}"
+            );
             if let Some(&prev) = errors.last() {
                 assert!(err < prev, "N={N} s={s}: volume {v} did not grow");
                 if s >= 3 {
@@ -596,7 +676,10 @@ mod tests {
             if s == 3 {
                 // Relative error at k = 8 is about 0.7 %, 1.9 %, 3.3 %, 5.0 % for N = 2 … 5.
                 let tol = [0.0, 0.0, 0.01, 0.025, 0.04, 0.06][N];
-                assert!(err < tol, "N={N}: sphere(3) volume {v} vs ball {ball} ({err})");
+                assert!(
+                    err < tol,
+                    "N={N}: sphere(3) volume {v} vs ball {ball} ({err})"
+                );
             }
             errors.push(err);
         }
@@ -616,7 +699,11 @@ mod tests {
             sum = add(&sum, a);
             for (j, b) in m.vertices.iter().enumerate() {
                 let want = if i == j { 1.0 } else { -1.0 / N as f64 };
-                assert!((dot(a, b) - want).abs() < 1e-14, "N={N}: v{i}·v{j} = {}", dot(a, b));
+                assert!(
+                    (dot(a, b) - want).abs() < 1e-14,
+                    "N={N}: v{i}·v{j} = {}",
+                    dot(a, b)
+                );
             }
         }
         assert!(norm(&sum) < 1e-14, "N={N}: centroid {sum:?}");
@@ -636,19 +723,40 @@ mod tests {
             let vn = vertex_normals(&m);
             let mut max_angle: f64 = 0.0;
             for (x, nv) in m.vertices.iter().zip(&vn) {
-                assert!((norm(x) - 1.0).abs() < 1e-14, "N={N} s={s}: |x| = {}", norm(x));
-                assert!((norm(nv) - 1.0).abs() < 1e-12, "N={N} s={s}: |n| = {}", norm(nv));
+                assert!(
+                    (norm(x) - 1.0).abs() < 1e-14,
+                    "N={N} s={s}: |x| = {}",
+                    norm(x)
+                );
+                assert!(
+                    (norm(nv) - 1.0).abs() < 1e-12,
+                    "N={N} s={s}: |n| = {}",
+                    norm(nv)
+                );
                 max_angle = max_angle.max(dot(x, nv).clamp(-1.0, 1.0).acos());
             }
             let k = f64::from(1u32 << s);
             let bound = if s >= 3 { 0.6 / k } else { 1.2 / k };
-            assert!(max_angle < bound, "N={N} s={s}: vertex normal {max_angle} rad off radial");
+            assert!(
+                max_angle < bound,
+                "N={N} s={s}: vertex normal {max_angle} rad off radial"
+            );
         }
         // The polytopes: unit vertex normals pointing away from the origin.
-        for (name, m) in all_shapes::<N>(0).into_iter().filter(|(name, _)| name != "sphere(0)") {
+        for (name, m) in all_shapes::<N>(0)
+            .into_iter()
+            .filter(|(name, _)| name != "sphere(0)")
+        {
             for (x, nv) in m.vertices.iter().zip(vertex_normals(&m)) {
-                assert!((norm(&nv) - 1.0).abs() < 1e-12, "N={N} {name}: |n| = {}", norm(&nv));
-                assert!(dot(x, &nv) > 0.0, "N={N} {name}: vertex normal points inward");
+                assert!(
+                    (norm(&nv) - 1.0).abs() < 1e-12,
+                    "N={N} {name}: |n| = {}",
+                    norm(&nv)
+                );
+                assert!(
+                    dot(x, &nv) > 0.0,
+                    "N={N} {name}: vertex normal points inward"
+                );
             }
         }
         // By symmetry the simplex's and cross-polytope's vertex normals are radial.
@@ -677,10 +785,19 @@ mod tests {
         let s: [u32; N] = std::array::from_fn(|i| i as u32);
         let mut t = s;
         t.swap(0, 1);
-        let pair = Mesh { vertices: vertices.clone(), simplices: vec![s, t] };
-        assert!(vertex_normals(&pair).iter().all(|n| *n == [0.0; N]), "N={N}: nonzero");
+        let pair = Mesh {
+            vertices: vertices.clone(),
+            simplices: vec![s, t],
+        };
+        assert!(
+            vertex_normals(&pair).iter().all(|n| *n == [0.0; N]),
+            "N={N}: nonzero"
+        );
         // A single simplex: its vertices get its unit normal +e_N·(sign), the unused one zero.
-        let single = Mesh { vertices, simplices: vec![s] };
+        let single = Mesh {
+            vertices,
+            simplices: vec![s],
+        };
         let vn = vertex_normals(&single);
         let mut want = [0.0; N];
         want[N - 1] = 1.0;
@@ -700,11 +817,17 @@ mod tests {
         // (The 80640-simplex N = 8 hypercube and sphere(0) are skipped for speed; their
         // orientation is checked by `shapes_are_closed_…`.)
         let shapes = all_shapes::<N>(1.min(CLOSED_SUBDIVISIONS[N]));
-        for (name, mesh) in shapes.into_iter().filter(|(_, m)| m.simplices.len() <= 50_000) {
+        for (name, mesh) in shapes
+            .into_iter()
+            .filter(|(_, m)| m.simplices.len() <= 50_000)
+        {
             // Already outward: unchanged.
             let mut same = mesh.clone();
             orient_outward(&mut same, [0.0; N]);
-            assert_eq!(same, mesh, "N={N} {name}: orient_outward changed an outward mesh");
+            assert_eq!(
+                same, mesh,
+                "N={N} {name}: orient_outward changed an outward mesh"
+            );
             // Random flips are undone exactly (swapping 0 and 1 twice is the identity).
             let mut flipped = mesh.clone();
             let mut count = 0;

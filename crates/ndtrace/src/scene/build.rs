@@ -48,7 +48,11 @@ pub enum Light<const N: usize> {
     /// Unit direction toward the light.
     Directional { direction: Vector<N>, color: Rgb },
     /// Position, colour and falloff exponent.
-    Point { position: Vector<N>, color: Rgb, falloff: f64 },
+    Point {
+        position: Vector<N>,
+        color: Rgb,
+        falloff: f64,
+    },
 }
 
 /// An object in world space.
@@ -103,11 +107,19 @@ impl<const N: usize> Scene<N> {
 type R<T> = Result<T, PathError>;
 
 /// Global id, prepared simplex (None when degenerate), unit normal and bounds of a simplex.
-type PrimRecord<const N: usize> = (u32, Option<PreparedSimplex<N>>, Vector<N>, ([f64; N], [f64; N]));
+type PrimRecord<const N: usize> = (
+    u32,
+    Option<PreparedSimplex<N>>,
+    Vector<N>,
+    ([f64; N], [f64; N]),
+);
 
 fn finite_list(v: &[f64], path: &str) -> R<()> {
     match v.iter().position(|x| !x.is_finite()) {
-        Some(i) => Err(PathError::new(format!("{path}[{i}]"), format!("non-finite value {}", v[i]))),
+        Some(i) => Err(PathError::new(
+            format!("{path}[{i}]"),
+            format!("non-finite value {}", v[i]),
+        )),
         None => Ok(()),
     }
 }
@@ -115,7 +127,10 @@ fn finite_list(v: &[f64], path: &str) -> R<()> {
 /// A vector of exactly N finite numbers.
 pub(crate) fn vec_n<const N: usize>(v: &[f64], path: &str) -> R<Vector<N>> {
     if v.len() != N {
-        return Err(PathError::new(path, format!("expected {N} numbers (dim = {N}), got {}", v.len())));
+        return Err(PathError::new(
+            path,
+            format!("expected {N} numbers (dim = {N}), got {}", v.len()),
+        ));
     }
     finite_list(v, path)?;
     Ok(std::array::from_fn(|i| v[i]))
@@ -124,11 +139,17 @@ pub(crate) fn vec_n<const N: usize>(v: &[f64], path: &str) -> R<Vector<N>> {
 /// An RGB triple of finite, non-negative numbers.
 fn rgb(v: &[f64], path: &str) -> R<Rgb> {
     if v.len() != 3 {
-        return Err(PathError::new(path, format!("expected 3 numbers, got {}", v.len())));
+        return Err(PathError::new(
+            path,
+            format!("expected 3 numbers, got {}", v.len()),
+        ));
     }
     finite_list(v, path)?;
     if let Some(i) = v.iter().position(|&x| x < 0.0) {
-        return Err(PathError::new(format!("{path}[{i}]"), format!("must be ≥ 0, got {}", v[i])));
+        return Err(PathError::new(
+            format!("{path}[{i}]"),
+            format!("must be ≥ 0, got {}", v[i]),
+        ));
     }
     Ok([v[0], v[1], v[2]])
 }
@@ -142,7 +163,10 @@ fn coefficient(c: &Coefficient, path: &str) -> R<Rgb> {
 
 fn matrix_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<Matrix<N>> {
     if rows.len() != N {
-        return Err(PathError::new(path, format!("expected {N} rows of {N} numbers, got {} rows", rows.len())));
+        return Err(PathError::new(
+            path,
+            format!("expected {N} rows of {N} numbers, got {} rows", rows.len()),
+        ));
     }
     let mut m = [[0.0; N]; N];
     for (i, row) in rows.iter().enumerate() {
@@ -155,10 +179,16 @@ fn camera<const N: usize>(c: &CameraDesc, samples: u32) -> R<Camera<N>> {
     let position = vec_n::<N>(&c.position, "camera.position")?;
     let orientation = match (&c.look_at, &c.orientation) {
         (Some(_), Some(_)) => {
-            return Err(PathError::new("camera", "give either look_at (with up) or orientation, not both"))
+            return Err(PathError::new(
+                "camera",
+                "give either look_at (with up) or orientation, not both",
+            ))
         }
         (None, None) => {
-            return Err(PathError::new("camera", "missing orientation: give look_at (with up) or orientation"))
+            return Err(PathError::new(
+                "camera",
+                "missing orientation: give look_at (with up) or orientation",
+            ))
         }
         (Some(target), None) => {
             let target = vec_n::<N>(target, "camera.look_at")?;
@@ -167,13 +197,20 @@ fn camera<const N: usize>(c: &CameraDesc, samples: u32) -> R<Camera<N>> {
                 Some(UpDesc::List(l)) => l.clone(),
                 Some(UpDesc::Single(v)) if N == 3 => vec![v.clone()],
                 Some(UpDesc::Single(_)) => {
-                    return Err(PathError::new("camera.up", format!("expected a list of {} vectors", N - 2)))
+                    return Err(PathError::new(
+                        "camera.up",
+                        format!("expected a list of {} vectors", N - 2),
+                    ))
                 }
             };
             if up.len() != N - 2 {
                 return Err(PathError::new(
                     "camera.up",
-                    format!("expected {} vector(s) of {N} numbers (dim = {N}), got {}", N - 2, up.len()),
+                    format!(
+                        "expected {} vector(s) of {N} numbers (dim = {N}), got {}",
+                        N - 2,
+                        up.len()
+                    ),
                 ));
             }
             let up: Vec<Vector<N>> = up
@@ -182,7 +219,10 @@ fn camera<const N: usize>(c: &CameraDesc, samples: u32) -> R<Camera<N>> {
                 .map(|(k, u)| vec_n::<N>(u, &format!("camera.up[{k}]")))
                 .collect::<R<_>>()?;
             look_at_orientation(&position, &target, &up).map_err(|bad| match bad {
-                None => PathError::new("camera.look_at", "equals camera.position: no view direction"),
+                None => PathError::new(
+                    "camera.look_at",
+                    "equals camera.position: no view direction",
+                ),
                 Some(k) => PathError::new(
                     format!("camera.up[{k}]"),
                     "is a combination of the view direction and the up vectors before it",
@@ -191,12 +231,18 @@ fn camera<const N: usize>(c: &CameraDesc, samples: u32) -> R<Camera<N>> {
         }
         (None, Some(rows)) => {
             if c.up.is_some() {
-                return Err(PathError::new("camera.up", "up goes with look_at, not with orientation"));
+                return Err(PathError::new(
+                    "camera.up",
+                    "up goes with look_at, not with orientation",
+                ));
             }
             let m = matrix_rows::<N>(rows, "camera.orientation")?;
             let g = mat_mul(&crate::linalg::transpose(&m), &m);
             let id: Matrix<N> = identity();
-            let err = (0..N).flat_map(|i| (0..N).map(move |j| (i, j))).map(|(i, j)| (g[i][j] - id[i][j]).abs()).fold(0.0, f64::max);
+            let err = (0..N)
+                .flat_map(|i| (0..N).map(move |j| (i, j)))
+                .map(|(i, j)| (g[i][j] - id[i][j]).abs())
+                .fold(0.0, f64::max);
             if err > 1e-6 {
                 return Err(PathError::new(
                     "camera.orientation",
@@ -209,21 +255,37 @@ fn camera<const N: usize>(c: &CameraDesc, samples: u32) -> R<Camera<N>> {
     let cell_unit = match c.projection {
         Projection::Perspective => {
             if c.extent.is_some() {
-                return Err(PathError::new("camera.extent", "extent is for orthographic cameras; use fov"));
+                return Err(PathError::new(
+                    "camera.extent",
+                    "extent is for orthographic cameras; use fov",
+                ));
             }
-            let fov = c.fov.ok_or_else(|| PathError::new("camera", "perspective camera needs fov (degrees)"))?;
+            let fov = c.fov.ok_or_else(|| {
+                PathError::new("camera", "perspective camera needs fov (degrees)")
+            })?;
             if !(fov > 0.0 && fov < 180.0) {
-                return Err(PathError::new("camera.fov", format!("must be between 0 and 180 degrees, got {fov}")));
+                return Err(PathError::new(
+                    "camera.fov",
+                    format!("must be between 0 and 180 degrees, got {fov}"),
+                ));
             }
             2.0 * (fov.to_radians() / 2.0).tan()
         }
         Projection::Orthographic => {
             if c.fov.is_some() {
-                return Err(PathError::new("camera.fov", "fov is for perspective cameras; use extent"));
+                return Err(PathError::new(
+                    "camera.fov",
+                    "fov is for perspective cameras; use extent",
+                ));
             }
-            let e = c.extent.ok_or_else(|| PathError::new("camera", "orthographic camera needs extent"))?;
+            let e = c
+                .extent
+                .ok_or_else(|| PathError::new("camera", "orthographic camera needs extent"))?;
             if !(e > 0.0 && e.is_finite()) {
-                return Err(PathError::new("camera.extent", format!("must be a positive number, got {e}")));
+                return Err(PathError::new(
+                    "camera.extent",
+                    format!("must be a positive number, got {e}"),
+                ));
             }
             2.0 * e
         }
@@ -234,18 +296,28 @@ fn camera<const N: usize>(c: &CameraDesc, samples: u32) -> R<Camera<N>> {
             if v.len() != N - 1 {
                 return Err(PathError::new(
                     "camera.resolution",
-                    format!("expected one integer or {} integers (dim = {N}), got {}", N - 1, v.len()),
+                    format!(
+                        "expected one integer or {} integers (dim = {N}), got {}",
+                        N - 1,
+                        v.len()
+                    ),
                 ));
             }
             v.clone()
         }
     };
     if let Some(k) = resolution.iter().position(|&r| r == 0) {
-        return Err(PathError::new("camera.resolution", format!("axis {} has zero cells", k + 1)));
+        return Err(PathError::new(
+            "camera.resolution",
+            format!("axis {} has zero cells", k + 1),
+        ));
     }
     // Exact cell count (u128 holds any 7 axes of u64 up to 2^128; beyond that, f64).
     let cells: f64 = resolution.iter().map(|&r| r as f64).product();
-    let cells_text = match resolution.iter().try_fold(1u128, |a, &r| a.checked_mul(r as u128)) {
+    let cells_text = match resolution
+        .iter()
+        .try_fold(1u128, |a, &r| a.checked_mul(r as u128))
+    {
         Some(c) => c.to_string(),
         None => format!("{cells:.3e}"),
     };
@@ -278,7 +350,11 @@ fn available_memory() -> u64 {
         .and_then(|s| {
             s.lines()
                 .find(|l| l.starts_with("MemAvailable:"))
-                .and_then(|l| l.split_whitespace().nth(1).and_then(|k| k.parse::<u64>().ok()))
+                .and_then(|l| {
+                    l.split_whitespace()
+                        .nth(1)
+                        .and_then(|k| k.parse::<u64>().ok())
+                })
         })
         .map(|kib| kib * 1024)
         .unwrap_or(16 << 30)
@@ -308,14 +384,20 @@ fn transform<const N: usize>(list: &[TransformDesc], path: &str) -> R<(Matrix<N>
         let (m, c): (Matrix<N>, Vector<N>) = match t {
             TransformDesc::Scale(ScaleDesc::Uniform(s)) => {
                 if !(s.is_finite() && *s != 0.0) {
-                    return Err(PathError::new(format!("{p}.scale"), format!("must be a non-zero number, got {s}")));
+                    return Err(PathError::new(
+                        format!("{p}.scale"),
+                        format!("must be a non-zero number, got {s}"),
+                    ));
                 }
                 (scale_matrix(&[*s; N]), [0.0; N])
             }
             TransformDesc::Scale(ScaleDesc::PerAxis(v)) => {
                 let s = vec_n::<N>(v, &format!("{p}.scale"))?;
                 if let Some(i) = s.iter().position(|&x| x == 0.0) {
-                    return Err(PathError::new(format!("{p}.scale[{i}]"), "must be non-zero"));
+                    return Err(PathError::new(
+                        format!("{p}.scale[{i}]"),
+                        "must be non-zero",
+                    ));
                 }
                 (scale_matrix(&s), [0.0; N])
             }
@@ -325,11 +407,17 @@ fn transform<const N: usize>(list: &[TransformDesc], path: &str) -> R<(Matrix<N>
                 if i >= N || j >= N || i == j {
                     return Err(PathError::new(
                         format!("{p}.rotate.plane"),
-                        format!("expected two different axes in 0..{} (dim = {N}), got [{i}, {j}]", N - 1),
+                        format!(
+                            "expected two different axes in 0..{} (dim = {N}), got [{i}, {j}]",
+                            N - 1
+                        ),
                     ));
                 }
                 if !r.degrees.is_finite() {
-                    return Err(PathError::new(format!("{p}.rotate.degrees"), "must be finite"));
+                    return Err(PathError::new(
+                        format!("{p}.rotate.degrees"),
+                        "must be finite",
+                    ));
                 }
                 (plane_rotation::<N>(i, j, r.degrees.to_radians()), [0.0; N])
             }
@@ -365,21 +453,32 @@ fn affine_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<(Matrix<N>, V
     if rows.len() != N + 1 {
         return Err(PathError::new(
             path,
-            format!("expected {N}×{N} (linear) or {}×{} (affine) rows, got {} rows", N + 1, N + 1, rows.len()),
+            format!(
+                "expected {N}×{N} (linear) or {}×{} (affine) rows, got {} rows",
+                N + 1,
+                N + 1,
+                rows.len()
+            ),
         ));
     }
     let mut m = [[0.0; N]; N];
     let mut b = [0.0; N];
     for (i, row) in rows.iter().enumerate() {
         if row.len() != N + 1 {
-            return Err(PathError::new(format!("{path}[{i}]"), format!("expected {} numbers, got {}", N + 1, row.len())));
+            return Err(PathError::new(
+                format!("{path}[{i}]"),
+                format!("expected {} numbers, got {}", N + 1, row.len()),
+            ));
         }
         finite_list(row, &format!("{path}[{i}]"))?;
         if i < N {
             m[i].copy_from_slice(&row[..N]);
             b[i] = row[N];
         } else if row[..N].iter().any(|&x| x != 0.0) || row[N] != 1.0 {
-            return Err(PathError::new(format!("{path}[{N}]"), "the last row of an affine matrix must be [0, …, 0, 1]"));
+            return Err(PathError::new(
+                format!("{path}[{N}]"),
+                "the last row of an affine matrix must be [0, …, 0, 1]",
+            ));
         }
     }
     Ok((m, b))
@@ -400,7 +499,10 @@ fn mesh_from_rows<const N: usize>(
             format!("non-finite coordinate {}", vertices[i]),
         ));
     }
-    let mut mesh = Mesh { vertices: Vec::with_capacity(nv), simplices: Vec::with_capacity(ns) };
+    let mut mesh = Mesh {
+        vertices: Vec::with_capacity(nv),
+        simplices: Vec::with_capacity(ns),
+    };
     for v in vertices.chunks_exact(N) {
         mesh.vertices.push(std::array::from_fn(|i| v[i]));
     }
@@ -424,7 +526,10 @@ fn mesh_from_rows<const N: usize>(
 fn object_mesh<const N: usize>(o: &ObjectDesc, path: &str, base: Option<&Path>) -> R<Mesh<N>> {
     let extra = |key: &str, present: bool| -> R<()> {
         if present {
-            Err(PathError::new(format!("{path}.{key}"), format!("\"{key}\" is not used by shape \"{}\"", shape_name(o.shape))))
+            Err(PathError::new(
+                format!("{path}.{key}"),
+                format!("\"{key}\" is not used by shape \"{}\"", shape_name(o.shape)),
+            ))
         } else {
             Ok(())
         }
@@ -444,7 +549,10 @@ fn object_mesh<const N: usize>(o: &ObjectDesc, path: &str, base: Option<&Path>) 
         ShapeKind::Sphere => {
             let s = o.subdivisions.unwrap_or(2);
             // 2N · (2^s)^(N−1) · (N−1)! simplices, computed in f64 so it cannot overflow.
-            let count = 2.0 * N as f64 * 2f64.powi((s as i32) * (N as i32 - 1)) * (1..N).map(|k| k as f64).product::<f64>();
+            let count = 2.0
+                * N as f64
+                * 2f64.powi((s as i32) * (N as i32 - 1))
+                * (1..N).map(|k| k as f64).product::<f64>();
             if count > MAX_GENERATED_SIMPLICES as f64 {
                 let exact = 1u128
                     .checked_shl(s.saturating_mul(N as u32 - 1))
@@ -471,7 +579,10 @@ fn object_mesh<const N: usize>(o: &ObjectDesc, path: &str, base: Option<&Path>) 
                     if row.len() != N {
                         return Err(PathError::new(
                             format!("{path}.simplices[{i}]"),
-                            format!("an (N−1)-simplex has {N} vertex indices (dim = {N}), got {}", row.len()),
+                            format!(
+                                "an (N−1)-simplex has {N} vertex indices (dim = {N}), got {}",
+                                row.len()
+                            ),
                         ));
                     }
                 }
@@ -493,27 +604,52 @@ fn object_mesh<const N: usize>(o: &ObjectDesc, path: &str, base: Option<&Path>) 
                     None => Path::new(file).to_path_buf(),
                 };
                 let fpath = format!("{path}.file");
-                let arrays = read_npz(&full, &["vertices", "simplices"]).map_err(|e| PathError::new(&fpath, e))?;
+                let arrays = read_npz(&full, &["vertices", "simplices"])
+                    .map_err(|e| PathError::new(&fpath, e))?;
                 let (v, s) = (&arrays[0], &arrays[1]);
                 if v.shape.1 != N {
-                    return Err(PathError::new(&fpath, format!("vertices have shape {:?}, expected (V, {N})", v.shape)));
+                    return Err(PathError::new(
+                        &fpath,
+                        format!("vertices have shape {:?}, expected (V, {N})", v.shape),
+                    ));
                 }
                 if s.shape.1 != N || !s.integer {
                     return Err(PathError::new(
                         &fpath,
-                        format!("simplices must be integers of shape (S, {N}), got shape {:?}", s.shape),
+                        format!(
+                            "simplices must be integers of shape (S, {N}), got shape {:?}",
+                            s.shape
+                        ),
                     ));
                 }
-                mesh_from_rows::<N>(&v.data, v.shape.0, &s.data, s.shape.0, path, &format!("{fpath}:vertices"), &format!("{fpath}:simplices"))?
+                mesh_from_rows::<N>(
+                    &v.data,
+                    v.shape.0,
+                    &s.data,
+                    s.shape.0,
+                    path,
+                    &format!("{fpath}:vertices"),
+                    &format!("{fpath}:simplices"),
+                )?
             }
             (None, None, None) => {
-                return Err(PathError::new(path, "a mesh needs vertices and simplices, or a file"))
+                return Err(PathError::new(
+                    path,
+                    "a mesh needs vertices and simplices, or a file",
+                ))
             }
             (_, _, Some(_)) => {
-                return Err(PathError::new(format!("{path}.file"), "give either file or vertices and simplices, not both"))
+                return Err(PathError::new(
+                    format!("{path}.file"),
+                    "give either file or vertices and simplices, not both",
+                ))
             }
-            (None, Some(_), None) => return Err(PathError::new(path, "mesh has simplices but no vertices")),
-            (Some(_), None, None) => return Err(PathError::new(path, "mesh has vertices but no simplices")),
+            (None, Some(_), None) => {
+                return Err(PathError::new(path, "mesh has simplices but no vertices"))
+            }
+            (Some(_), None, None) => {
+                return Err(PathError::new(path, "mesh has vertices but no simplices"))
+            }
         },
     })
 }
@@ -524,7 +660,10 @@ fn shape_name(k: ShapeKind) -> &'static str {
 
 fn material(m: &MaterialDesc, path: &str) -> R<Material> {
     if !(m.shininess >= 0.0 && m.shininess.is_finite()) {
-        return Err(PathError::new(format!("{path}.shininess"), format!("must be a finite number ≥ 0, got {}", m.shininess)));
+        return Err(PathError::new(
+            format!("{path}.shininess"),
+            format!("must be a finite number ≥ 0, got {}", m.shininess),
+        ));
     }
     Ok(Material {
         color: rgb(&m.color, &format!("{path}.color"))?,
@@ -542,14 +681,27 @@ fn light<const N: usize>(l: &LightDesc, path: &str) -> R<Light<N>> {
             let d = vec_n::<N>(direction, &format!("{path}.direction"))?;
             let len = norm(&d);
             if !(len > 0.0) {
-                return Err(PathError::new(format!("{path}.direction"), "must not be the zero vector"));
+                return Err(PathError::new(
+                    format!("{path}.direction"),
+                    "must not be the zero vector",
+                ));
             }
-            Light::Directional { direction: scale(&d, 1.0 / len), color: rgb(color, &format!("{path}.color"))? }
+            Light::Directional {
+                direction: scale(&d, 1.0 / len),
+                color: rgb(color, &format!("{path}.color"))?,
+            }
         }
-        LightDesc::Point { position, color, falloff } => {
+        LightDesc::Point {
+            position,
+            color,
+            falloff,
+        } => {
             let f = falloff.unwrap_or(0.0);
             if !(f >= 0.0 && f.is_finite()) {
-                return Err(PathError::new(format!("{path}.falloff"), format!("must be a finite number ≥ 0, got {f}")));
+                return Err(PathError::new(
+                    format!("{path}.falloff"),
+                    format!("must be a finite number ≥ 0, got {f}"),
+                ));
             }
             Light::Point {
                 position: vec_n::<N>(position, &format!("{path}.position"))?,
@@ -568,14 +720,25 @@ pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N
     let ambient = rgb(&desc.ambient, "ambient")?;
     let r = &desc.render;
     if r.samples == 0 || r.samples > MAX_SAMPLES {
-        return Err(PathError::new("render.samples", format!("must be in 1..={MAX_SAMPLES}, got {}", r.samples)));
+        return Err(PathError::new(
+            "render.samples",
+            format!("must be in 1..={MAX_SAMPLES}, got {}", r.samples),
+        ));
     }
     let camera = camera::<N>(&desc.camera, r.samples)?;
-    let lights = desc.lights.iter().enumerate().map(|(i, l)| light::<N>(l, &format!("lights[{i}]"))).collect::<R<Vec<_>>>()?;
+    let lights = desc
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(i, l)| light::<N>(l, &format!("lights[{i}]")))
+        .collect::<R<Vec<_>>>()?;
     let mut plans = Vec::with_capacity(desc.objects.len());
     for (i, o) in desc.objects.iter().enumerate() {
         let p = format!("objects[{i}]");
-        plans.push((material(&o.material, &format!("{p}.material"))?, transform::<N>(&o.transform, &format!("{p}.transform"))?));
+        plans.push((
+            material(&o.material, &format!("{p}.material"))?,
+            transform::<N>(&o.transform, &format!("{p}.transform"))?,
+        ));
     }
     // 2. Meshes in world space. A transform that reverses handedness (det < 0) would turn
     //    outward normals inward (normals are pseudotensors), so such simplices are reordered to
@@ -583,15 +746,28 @@ pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N
     let mut objects = Vec::with_capacity(desc.objects.len());
     for (i, (o, (mat, (a, b)))) in desc.objects.iter().zip(plans).enumerate() {
         let mut mesh = object_mesh::<N>(o, &format!("objects[{i}]"), base)?;
-        mesh.vertices.par_iter_mut().for_each(|v| *v = add(&mat_vec(&a, v), &b));
-        if let Some(k) = mesh.vertices.iter().position(|v| v.iter().any(|x| !x.is_finite())) {
-            return Err(PathError::new(format!("objects[{i}].transform"), format!("makes vertex {k} non-finite")));
+        mesh.vertices
+            .par_iter_mut()
+            .for_each(|v| *v = add(&mat_vec(&a, v), &b));
+        if let Some(k) = mesh
+            .vertices
+            .iter()
+            .position(|v| v.iter().any(|x| !x.is_finite()))
+        {
+            return Err(PathError::new(
+                format!("objects[{i}].transform"),
+                format!("makes vertex {k} non-finite"),
+            ));
         }
         if det(&a) < 0.0 {
             mesh.simplices.iter_mut().for_each(|s| s.swap(0, 1));
         }
         let vertex_normals = mat.smooth.then(|| shapes::vertex_normals(&mesh));
-        objects.push(Object { mesh, material: mat, vertex_normals });
+        objects.push(Object {
+            mesh,
+            material: mat,
+            vertex_normals,
+        });
     }
     // 3. Prepared simplices and the BVH.
     let mut offsets = Vec::with_capacity(objects.len());
@@ -600,8 +776,14 @@ pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N
         offsets.push(total as u32);
         total += o.mesh.simplices.len() as u64;
     }
-    if total > u32::MAX as u64 - 1 {
-        return Err(PathError::new("objects", format!("{total} simplices in all: at most {} are supported", u32::MAX - 1)));
+    if total >= 1 << 31 {
+        return Err(PathError::new(
+            "objects",
+            format!(
+                "{total} simplices in all: at most {} are supported",
+                (1u64 << 31) - 1
+            ),
+        ));
     }
     let per_object: Vec<Vec<PrimRecord<N>>> = objects
         .iter()
@@ -649,10 +831,16 @@ pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N
             }
         }
     }
-    let extent = if prims.is_empty() { 1.0 } else { norm(&std::array::from_fn::<f64, N, _>(|k| hi[k] - lo[k])).max(1e-300) };
+    let extent = if prims.is_empty() {
+        1.0
+    } else {
+        norm(&std::array::from_fn::<f64, N, _>(|k| hi[k] - lo[k])).max(1e-300)
+    };
     let mut warnings = vec![];
     if skipped > 0 {
-        warnings.push(format!("skipped {skipped} degenerate (zero-volume) simplices"));
+        warnings.push(format!(
+            "skipped {skipped} degenerate (zero-volume) simplices"
+        ));
     }
     let bvh = Bvh::build(prims, ids, bounds);
     let _ = dot::<N>;

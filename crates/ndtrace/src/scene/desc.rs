@@ -50,6 +50,56 @@ pub struct SceneDesc {
     /// Tracing options.
     #[serde(default)]
     pub render: RenderDesc,
+    /// How the CLI turns the retina into a picture (keyword arguments of `ndtrace.composite`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub composite: Option<CompositeDesc>,
+}
+
+/// Compositing mode of a retina.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CompositeModeDesc {
+    /// Front-to-back emission–absorption.
+    Volume,
+    /// Maximum intensity projection.
+    Mip,
+    /// The nearest occupied cell, opaque.
+    FirstHit,
+    /// A montage of slices.
+    Slices,
+}
+
+/// `[composite]`: defaults for turning the retina into a picture; every key optional.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct CompositeDesc {
+    /// Compositing mode.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mode: Option<CompositeModeDesc>,
+    /// Orbit angle of the 3D compositing camera, degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub azimuth: Option<f64>,
+    /// Elevation of the 3D compositing camera, degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub elevation: Option<f64>,
+    /// Distance of the 3D compositing camera.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distance: Option<f64>,
+    /// Projection of the 3D compositing camera.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub projection: Option<Projection>,
+    /// Picture size [W, H].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<[u32; 2]>,
+    /// Scale of each cell's opacity.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub opacity: Option<f64>,
+    /// Strength of depth cueing along the hidden axis.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_cue: Option<f64>,
+    /// Axis of the slices montage.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<u32>,
 }
 
 fn default_background() -> Vec<f64> {
@@ -72,7 +122,10 @@ pub enum Projection {
 
 /// One resolution for every retina axis, or one per axis R_1 … R_{N−1}.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(untagged, expecting = "expected a positive integer or a list of N−1 positive integers")]
+#[serde(
+    untagged,
+    expecting = "expected a positive integer or a list of N−1 positive integers"
+)]
 pub enum Resolution {
     /// The same number of cells along every retina axis.
     Uniform(u64),
@@ -166,7 +219,8 @@ pub enum ShapeKind {
 
 impl ShapeKind {
     /// The names accepted in scene files.
-    pub const NAMES: [&'static str; 5] = ["mesh", "simplex", "hypercube", "cross_polytope", "sphere"];
+    pub const NAMES: [&'static str; 5] =
+        ["mesh", "simplex", "hypercube", "cross_polytope", "sphere"];
 }
 
 /// An object: a shape, a material and a transform.

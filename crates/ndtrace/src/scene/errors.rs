@@ -15,7 +15,10 @@ pub struct PathError {
 impl PathError {
     /// A new error at `path`.
     pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
-        PathError { path: path.into(), message: message.into() }
+        PathError {
+            path: path.into(),
+            message: message.into(),
+        }
     }
 }
 
@@ -25,7 +28,11 @@ pub fn friendly_message(message: &str, path: &str) -> String {
     let ticked: Vec<&str> = message.split('`').skip(1).step_by(2).collect();
     let kind = if message.starts_with("unknown variant") {
         let last = path.rsplit(['.', ']']).next().unwrap_or("");
-        let what = if last.is_empty() || last.chars().all(|c| c.is_ascii_digit()) { "value" } else { last };
+        let what = if last.is_empty() || last.chars().all(|c| c.is_ascii_digit()) {
+            "value"
+        } else {
+            last
+        };
         Some(what.to_string())
     } else if message.starts_with("unknown field") {
         Some("key".to_string())
@@ -49,7 +56,10 @@ pub fn friendly_message(message: &str, path: &str) -> String {
 
 /// The candidate within edit distance ⌈len/3⌉ of `word`, if any.
 fn closest<'a>(word: &str, candidates: &[&'a str]) -> Option<&'a str> {
-    let best = candidates.iter().map(|c| (levenshtein(word, c), *c)).min()?;
+    let best = candidates
+        .iter()
+        .map(|c| (levenshtein(word, c), *c))
+        .min()?;
     (best.0 <= word.chars().count().div_ceil(3).max(1)).then_some(best.1)
 }
 
@@ -59,7 +69,9 @@ fn levenshtein(a: &str, b: &str) -> usize {
     for (i, ca) in a.chars().enumerate() {
         let mut cur = vec![i + 1; b.len() + 1];
         for (j, cb) in b.iter().enumerate() {
-            cur[j + 1] = (prev[j] + usize::from(ca != *cb)).min(prev[j + 1] + 1).min(cur[j] + 1);
+            cur[j + 1] = (prev[j] + usize::from(ca != *cb))
+                .min(prev[j + 1] + 1)
+                .min(cur[j] + 1);
         }
         prev = cur;
     }
@@ -138,11 +150,20 @@ mod tests {
             "unknown variant `hypercub`, expected one of `mesh`, `simplex`, `hypercube`",
             "objects[1].shape",
         );
-        assert_eq!(m, "unknown shape \"hypercub\" (did you mean \"hypercube\"?)");
-        let m = friendly_message("unknown field `colr`, expected one of `color`, `smooth`", "objects[0].material");
+        assert_eq!(
+            m,
+            "unknown shape \"hypercub\" (did you mean \"hypercube\"?)"
+        );
+        let m = friendly_message(
+            "unknown field `colr`, expected one of `color`, `smooth`",
+            "objects[0].material",
+        );
         assert_eq!(m, "unknown key \"colr\" (did you mean \"color\"?)");
         let m = friendly_message("unknown field `zzzzzz`, expected `color` or `smooth`", "x");
-        assert_eq!(m, "unknown key \"zzzzzz\" (expected one of \"color\", \"smooth\")");
+        assert_eq!(
+            m,
+            "unknown key \"zzzzzz\" (expected one of \"color\", \"smooth\")"
+        );
         assert_eq!(friendly_message("invalid type", "x"), "invalid type");
     }
 

@@ -31,13 +31,34 @@ macro_rules! with_scene {
     ($any:expr, $s:ident, $N:ident => $body:expr) => {{
         use $crate::scene::AnyScene as A;
         match $any {
-            A::D2($s) => { const $N: usize = 2; $body }
-            A::D3($s) => { const $N: usize = 3; $body }
-            A::D4($s) => { const $N: usize = 4; $body }
-            A::D5($s) => { const $N: usize = 5; $body }
-            A::D6($s) => { const $N: usize = 6; $body }
-            A::D7($s) => { const $N: usize = 7; $body }
-            A::D8($s) => { const $N: usize = 8; $body }
+            A::D2($s) => {
+                const $N: usize = 2;
+                $body
+            }
+            A::D3($s) => {
+                const $N: usize = 3;
+                $body
+            }
+            A::D4($s) => {
+                const $N: usize = 4;
+                $body
+            }
+            A::D5($s) => {
+                const $N: usize = 5;
+                $body
+            }
+            A::D6($s) => {
+                const $N: usize = 6;
+                $body
+            }
+            A::D7($s) => {
+                const $N: usize = 7;
+                $body
+            }
+            A::D8($s) => {
+                const $N: usize = 8;
+                $body
+            }
         }
     }};
 }
@@ -58,7 +79,11 @@ pub struct Loaded {
     pub base: Option<PathBuf>,
 }
 
-fn locate(src: &Source<'_>, root: Option<&toml::Spanned<toml::de::DeTable<'_>>>, e: PathError) -> NdError {
+fn locate(
+    src: &Source<'_>,
+    root: Option<&toml::Spanned<toml::de::DeTable<'_>>>,
+    e: PathError,
+) -> NdError {
     let location = match (src, root) {
         (Source::Toml { name, text }, Some(root)) => {
             let (l, c) = line_col(text, span_of(root, &e.path).start);
@@ -67,7 +92,11 @@ fn locate(src: &Source<'_>, root: Option<&toml::Spanned<toml::de::DeTable<'_>>>,
         (Source::Toml { name, .. }, None) => name.to_string(),
         (Source::Unlocated(name), _) => name.to_string(),
     };
-    NdError::Scene { location, path: e.path, message: e.message }
+    NdError::Scene {
+        location,
+        path: e.path,
+        message: e.message,
+    }
 }
 
 /// Deserializes a description, turning serde errors into [`PathError`]s with field paths.
@@ -81,19 +110,34 @@ where
         let path = if path == "." { String::new() } else { path };
         let inner = e.into_inner().to_string();
         // toml's own messages may carry a location block; keep the first line.
-        let msg = inner.lines().find(|l| !l.trim().is_empty() && !l.starts_with("TOML parse error")).unwrap_or(&inner);
-        PathError { message: friendly_message(msg.trim(), &path), path }
+        let msg = inner
+            .lines()
+            .find(|l| !l.trim().is_empty() && !l.starts_with("TOML parse error"))
+            .unwrap_or(&inner);
+        PathError {
+            message: friendly_message(msg.trim(), &path),
+            path,
+        }
     })
 }
 
 /// Parses TOML text and builds the scene; `name` locates errors (`name:line:col: path: msg`).
-pub fn load_toml_str(text: &str, name: &str, base: Option<&Path>) -> NdResult<(SceneDesc, AnyScene)> {
+pub fn load_toml_str(
+    text: &str,
+    name: &str,
+    base: Option<&Path>,
+) -> NdResult<(SceneDesc, AnyScene)> {
     let src = Source::Toml { name, text };
     let root = toml::de::DeTable::parse(text).map_err(|e| {
         let (l, c) = line_col(text, e.span().map_or(0, |s| s.start));
-        NdError::Scene { location: format!("{name}:{l}:{c}"), path: String::new(), message: e.message().to_string() }
+        NdError::Scene {
+            location: format!("{name}:{l}:{c}"),
+            path: String::new(),
+            message: e.message().to_string(),
+        }
     })?;
-    let desc = deserialize(toml::de::Deserializer::from(root.clone())).map_err(|e| locate(&src, Some(&root), e))?;
+    let desc = deserialize(toml::de::Deserializer::from(root.clone()))
+        .map_err(|e| locate(&src, Some(&root), e))?;
     let scene = build_any(&desc, base).map_err(|e| locate(&src, Some(&root), e))?;
     Ok((desc, scene))
 }
@@ -101,8 +145,11 @@ pub fn load_toml_str(text: &str, name: &str, base: Option<&Path>) -> NdResult<(S
 /// Reads a TOML scene file and builds it; mesh files resolve relative to its directory.
 pub fn load_file(path: &Path) -> NdResult<(SceneDesc, AnyScene)> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| NdError::Scene { location: name.clone(), path: String::new(), message: format!("cannot read: {e}") })?;
+    let text = std::fs::read_to_string(path).map_err(|e| NdError::Scene {
+        location: name.clone(),
+        path: String::new(),
+        message: format!("cannot read: {e}"),
+    })?;
     load_toml_str(&text, &name, path.parent())
 }
 
@@ -113,7 +160,10 @@ pub fn build_desc(desc: &SceneDesc, name: &str, base: Option<&Path>) -> NdResult
 
 /// Serializes a description as TOML (the inverse of [`load_toml_str`] for the description).
 pub fn to_toml(desc: &SceneDesc) -> NdResult<String> {
-    toml::to_string(desc).map_err(|e| NdError::Value { arg: "scene".into(), message: e.to_string() })
+    toml::to_string(desc).map_err(|e| NdError::Value {
+        arg: "scene".into(),
+        message: e.to_string(),
+    })
 }
 
 fn build_any(desc: &SceneDesc, base: Option<&Path>) -> Result<AnyScene, PathError> {
@@ -122,7 +172,13 @@ fn build_any(desc: &SceneDesc, base: Option<&Path>) -> Result<AnyScene, PathErro
         <Scene<N> as IntoAny>::into_any(s)
     }));
     built.map_err(|_| {
-        PathError::new("dim", format!("dimension {} is not supported: dim must be in 2..=8", desc.dim))
+        PathError::new(
+            "dim",
+            format!(
+                "dimension {} is not supported: dim must be in 2..=8",
+                desc.dim
+            ),
+        )
     })?
 }
 
@@ -207,22 +263,48 @@ simplices = [[0, 1, 2, 3]]
     #[test]
     fn errors_name_file_line_column_and_field() {
         let bad = CUBE.replace("color = [1, 0.5, 0.25]", "color = [1, 0.5]");
-        let line = bad.lines().position(|l| l.contains("color = [1, 0.5]")).unwrap() + 1;
+        let line = bad
+            .lines()
+            .position(|l| l.contains("color = [1, 0.5]"))
+            .unwrap()
+            + 1;
         let col = bad.lines().nth(line - 1).unwrap().find("[1, 0.5]").unwrap() + 1;
-        assert_eq!(err(&bad), format!("scene.toml:{line}:{col}: objects[0].material.color: expected 3 numbers, got 2"));
+        assert_eq!(
+            err(&bad),
+            format!(
+                "scene.toml:{line}:{col}: objects[0].material.color: expected 3 numbers, got 2"
+            )
+        );
         let e = err(&CUBE.replace("shape = \"hypercube\"", "shape = \"hypercub\""));
-        assert!(e.contains("objects[0].shape: unknown shape \"hypercub\" (did you mean \"hypercube\"?)"), "{e}");
+        assert!(
+            e.contains(
+                "objects[0].shape: unknown shape \"hypercub\" (did you mean \"hypercube\"?)"
+            ),
+            "{e}"
+        );
         let e = err(&CUBE.replace("falloff = 3", "falof = 3"));
-        assert!(e.contains("lights[0]") && e.contains("did you mean \"falloff\""), "{e}");
+        assert!(
+            e.contains("lights[0]") && e.contains("did you mean \"falloff\""),
+            "{e}"
+        );
         let e = err(&CUBE.replace("simplices = [[0, 1, 2, 3]]", "simplices = [[0, 1, 2, 4]]"));
-        assert!(e.contains("objects[1].simplices[0][3]: vertex index 4 out of range"), "{e}");
+        assert!(
+            e.contains("objects[1].simplices[0][3]: vertex index 4 out of range"),
+            "{e}"
+        );
         let e = err(&CUBE.replace("dim = 4", "dim = 9"));
         assert!(e.contains("dim") && e.contains("2..=8"), "{e}");
         let e = err(&CUBE.replace("resolution = [8, 6, 4]", "resolution = [8, 0, 4]"));
-        assert!(e.contains("camera.resolution: axis 2 has zero cells"), "{e}");
+        assert!(
+            e.contains("camera.resolution: axis 2 has zero cells"),
+            "{e}"
+        );
         let e = err(&CUBE.replace("resolution = [8, 6, 4]", "resolution = 100000000"));
         assert!(e.contains("camera.resolution") && e.contains("iB"), "{e}");
-        let e = err(&CUBE.replace("[[objects]]\nshape = \"mesh\"", "[[objects]]\nshape = \"mesh\"\nx = ]"));
+        let e = err(&CUBE.replace(
+            "[[objects]]\nshape = \"mesh\"",
+            "[[objects]]\nshape = \"mesh\"\nx = ]",
+        ));
         assert!(e.starts_with("scene.toml:"), "{e}");
     }
 }

@@ -17,7 +17,8 @@ pub struct Array2 {
 
 /// Reads the named 2-D arrays from an `.npz` file.
 pub fn read_npz(path: &Path, names: &[&str]) -> Result<Vec<Array2>, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+    let file =
+        std::fs::File::open(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
     let mut zip = zip::ZipArchive::new(file)
         .map_err(|e| format!("{} is not an .npz (zip) archive: {e}", path.display()))?;
     names
@@ -27,7 +28,9 @@ pub fn read_npz(path: &Path, names: &[&str]) -> Result<Vec<Array2>, String> {
                 .by_name(&format!("{name}.npy"))
                 .map_err(|_| format!("{} has no array named \"{name}\"", path.display()))?;
             let mut bytes = Vec::with_capacity(entry.size() as usize);
-            entry.read_to_end(&mut bytes).map_err(|e| format!("{}: reading \"{name}\": {e}", path.display()))?;
+            entry
+                .read_to_end(&mut bytes)
+                .map_err(|e| format!("{}: reading \"{name}\": {e}", path.display()))?;
             parse_npy(&bytes).map_err(|e| format!("{}: array \"{name}\": {e}", path.display()))
         })
         .collect()
@@ -40,9 +43,10 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Array2, String> {
     }
     let (header_len, start) = match bytes[6] {
         1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
-        2 | 3 if bytes.len() >= 12 => {
-            (u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize, 12)
-        }
+        2 | 3 if bytes.len() >= 12 => (
+            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+            12,
+        ),
         v => return Err(format!("unsupported .npy version {v}")),
     };
     let header = bytes
@@ -50,13 +54,24 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Array2, String> {
         .and_then(|h| std::str::from_utf8(h).ok())
         .ok_or("truncated .npy header")?;
     let field = |key: &str| -> Result<&str, String> {
-        let at = header.find(&format!("'{key}'")).ok_or(format!("header lacks '{key}'"))?;
-        Ok(header[at + key.len() + 2..].trim_start().trim_start_matches(':').trim_start())
+        let at = header
+            .find(&format!("'{key}'"))
+            .ok_or(format!("header lacks '{key}'"))?;
+        Ok(header[at + key.len() + 2..]
+            .trim_start()
+            .trim_start_matches(':')
+            .trim_start())
     };
     let descr = field("descr")?;
-    let descr = descr.trim_start_matches('\'').split('\'').next().unwrap_or("");
+    let descr = descr
+        .trim_start_matches('\'')
+        .split('\'')
+        .next()
+        .unwrap_or("");
     if field("fortran_order")?.starts_with("True") {
-        return Err("Fortran-ordered arrays are not supported (use numpy.ascontiguousarray)".into());
+        return Err(
+            "Fortran-ordered arrays are not supported (use numpy.ascontiguousarray)".into(),
+        );
     }
     let shape_text = field("shape")?;
     let shape_text = &shape_text[1..shape_text.find(')').ok_or("bad shape")?];
@@ -64,7 +79,10 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Array2, String> {
         .split(',')
         .map(str::trim)
         .filter(|s| !s.is_empty())
-        .map(|s| s.parse::<usize>().map_err(|_| format!("bad shape ({shape_text})")))
+        .map(|s| {
+            s.parse::<usize>()
+                .map_err(|_| format!("bad shape ({shape_text})"))
+        })
         .collect::<Result<_, _>>()?;
     let (rows, cols) = match dims[..] {
         [r, c] => (r, c),
@@ -74,11 +92,20 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Array2, String> {
     let count = rows * cols;
     let (width, integer): (usize, bool) = match descr {
         "<f8" | "<f4" | "|f1" => (descr[2..].parse().unwrap_or(8), false),
-        "<i8" | "<i4" | "<i2" | "|i1" | "<u8" | "<u4" | "<u2" | "|u1" => (descr[2..].parse().unwrap_or(8), true),
-        other => return Err(format!("unsupported dtype {other} (use float64 or an integer type)")),
+        "<i8" | "<i4" | "<i2" | "|i1" | "<u8" | "<u4" | "<u2" | "|u1" => {
+            (descr[2..].parse().unwrap_or(8), true)
+        }
+        other => {
+            return Err(format!(
+                "unsupported dtype {other} (use float64 or an integer type)"
+            ))
+        }
     };
     if data.len() < count * width {
-        return Err(format!("truncated data: {} bytes for {count} values of {width} bytes", data.len()));
+        return Err(format!(
+            "truncated data: {} bytes for {count} values of {width} bytes",
+            data.len()
+        ));
     }
     let conv = |c: &[u8]| -> f64 {
         match descr {
@@ -94,8 +121,15 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Array2, String> {
             _ => c[0] as f64,
         }
     };
-    let values = data[..count * width].chunks_exact(width).map(conv).collect();
-    Ok(Array2 { shape: (rows, cols), data: values, integer })
+    let values = data[..count * width]
+        .chunks_exact(width)
+        .map(conv)
+        .collect();
+    Ok(Array2 {
+        shape: (rows, cols),
+        data: values,
+        integer,
+    })
 }
 
 #[cfg(test)]
@@ -103,7 +137,8 @@ mod tests {
     use super::*;
 
     fn npy(descr: &str, shape: &str, payload: &[u8]) -> Vec<u8> {
-        let mut header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+        let mut header =
+            format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
         while (10 + header.len() + 1) % 64 != 0 {
             header.push(' ');
         }
@@ -117,7 +152,10 @@ mod tests {
 
     #[test]
     fn parses_float_and_integer_arrays() {
-        let payload: Vec<u8> = [1.5f64, -2.0, 3.0, 4.25].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let payload: Vec<u8> = [1.5f64, -2.0, 3.0, 4.25]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
         let a = parse_npy(&npy("<f8", "(2, 2)", &payload)).unwrap();
         assert_eq!(a.shape, (2, 2));
         assert_eq!(a.data, vec![1.5, -2.0, 3.0, 4.25]);

@@ -1,0 +1,217 @@
+"""The ``ndtrace`` command: render an N-dimensional scene to a picture.
+
+    ndtrace scenes/tesseract.toml -o tesseract.png
+    ndtrace scenes/tesseract.toml -o tesseract.exr --retina retina.exr --samples 4
+    ndtrace scenes/penteract.toml -o penteract.png --composite mip --view 40,25 --size 800x600
+    ndtrace my_scene.py -o out.png          # a Python script defining scene() -> ndtrace.Scene
+
+The whole scene is validated before any work; errors are one line on stderr (exit status 2),
+with a traceback only under --debug. Ctrl-C stops within a second, leaves no partial output
+and exits with status 130.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import runpy
+import sys
+import time
+import traceback
+
+import numpy as np
+
+from . import __version__
+from .files import write_exr, write_png
+from .retina import trace
+from .scene import Scene, load_dict, load_file
+
+MODES = ("shaded", "depth", "normal", "primitive_id", "barycentric")
+COMPOSITES = ("volume", "mip", "first_hit", "slices")
+
+
+class UsageError(Exception):
+    """A problem with the command line or the scene: one line, exit status 2."""
+
+
+class Progress:
+    """A one-line progress bar with an ETA on stderr."""
+
+    def __init__(self, quiet: bool) -> None:
+        self.quiet = quiet
+        self.stage = ""
+        self.start = time.monotonic()
+        self.last = 0.0
+        self.tty = sys.stderr.isatty()
+
+    def begin(self, stage: str) -> None:
+        self.stage = stage
+        self.start = time.monotonic()
+        self.last = 0.0
+        self.update(0, 1)
+
+    def update(self, done: int, total: int) -> None:
+        if self.quiet:
+            return
+        now = time.monotonic()
+        if done < total and now - self.last < (0.1 if self.tty else 2.0):
+            return
+        self.last = now
+        frac = done / total if total else 1.0
+        elapsed = now - self.start
+        eta = f"ETA {elapsed / frac - elapsed:5.1f} s" if 0 < frac < 1 else f"{elapsed:5.1f} s"
+        bar = "#" * int(frac * 30)
+        line = f"{self.stage:<12} [{bar:<30}] {frac * 100:5.1f}%  {eta}"
+        sys.stderr.write(("\r" + line) if self.tty else (line + "\n"))
+        sys.stderr.flush()
+
+    def end(self) -> None:
+        if not self.quiet and self.tty:
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="ndtrace",
+        description="Render an N-dimensional scene (N = 2…8) to a picture: trace the N-D camera's "
+        "(N−1)-D retina, then composite it to 2D.",
+        epilog=__doc__.split("\n\n")[1] if __doc__ else None,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("scene", help="a .toml scene, or a .py script defining scene() -> ndtrace.Scene")
+    p.add_argument("-o", "--output", required=True, help="the picture to write: .png or .exr")
+    p.add_argument("--retina", metavar="FILE.exr", help="also write the traced retina there")
+    p.add_argument("--resolution", help="cells per retina axis: R or R1,R2,… (overrides the camera's)")
+    p.add_argument("--samples", type=int, help="rays per retina cell")
+    p.add_argument("--seed", type=int, help="seed of the sample jitter")
+    p.add_argument("--threads", type=int, help="worker threads (default: every core)")
+    p.add_argument("--mode", choices=MODES, help="what the tracer shows (render.mode)")
+    p.add_argument("--composite", choices=COMPOSITES, help="how the retina becomes a picture")
+    p.add_argument("--view", metavar="AZIMUTH,ELEVATION", help="compositing camera angles, degrees")
+    p.add_argument("--size", metavar="WxH", help="picture size in pixels")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.add_argument("--debug", action="store_true", help="show tracebacks")
+    p.add_argument("--version", action="version", version=f"ndtrace {__version__}")
+    return p
+
+
+def _ints(text: str, option: str, sep: str = ",") -> list[int]:
+    try:
+        values = [int(v) for v in text.split(sep)]
+    except ValueError:
+        raise UsageError(f"{option}: expected integers separated by '{sep}', got {text!r}") from None
+    if any(v <= 0 for v in values):
+        raise UsageError(f"{option}: values must be positive, got {text!r}")
+    return values
+
+
+def _load(path: str) -> Scene:
+    if not os.path.exists(path):
+        raise UsageError(f"{path}: no such file")
+    if path.endswith(".toml"):
+        return load_file(path)
+    if path.endswith(".py"):
+        namespace = runpy.run_path(path)
+        make = namespace.get("scene")
+        if not callable(make):
+            raise UsageError(f"{path}: a scene script must define scene() returning an ndtrace.Scene")
+        scene = make()
+        if not isinstance(scene, Scene):
+            raise UsageError(f"{path}: scene() returned {type(scene).__name__}, not an ndtrace.Scene")
+        scene.compiled()  # validate now
+        return scene
+    raise UsageError(f"{path}: unknown scene type: expected a .toml or .py file")
+
+
+def _check_output(path: str, exts: tuple[str, ...], option: str) -> None:
+    if not path.lower().endswith(exts):
+        raise UsageError(f"{option} {path}: unknown extension: expected {' or '.join(exts)}")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise UsageError(f"{option} {path}: folder {folder} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise UsageError(f"{option} {path}: folder {folder} is not writable")
+
+
+def run(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    # 1. Validate everything before any work or progress output.
+    _check_output(args.output, (".png", ".exr"), "-o")
+    if args.retina:
+        _check_output(args.retina, (".exr",), "--retina")
+    if args.threads is not None and args.threads < 1:
+        raise UsageError(f"--threads: must be at least 1, got {args.threads}")
+    scene = _load(args.scene)
+    data = scene.to_dict()
+    render = data.setdefault("render", {})
+    if args.resolution:
+        res = _ints(args.resolution, "--resolution")
+        data["camera"]["resolution"] = res[0] if len(res) == 1 else res
+    if args.samples is not None:
+        render["samples"] = args.samples
+    if args.seed is not None:
+        render["seed"] = args.seed
+    if args.mode:
+        render["mode"] = args.mode
+    comp = dict(data.get("composite") or {})
+    if args.composite:
+        comp["mode"] = args.composite
+    if args.view:
+        try:
+            az, el = (float(v) for v in args.view.split(","))
+        except ValueError:
+            raise UsageError(f"--view: expected AZIMUTH,ELEVATION in degrees, got {args.view!r}") from None
+        comp["azimuth"], comp["elevation"] = az, el
+    if args.size:
+        comp["size"] = _ints(args.size.lower(), "--size", "x")
+        if len(comp["size"]) != 2:
+            raise UsageError(f"--size: expected WxH, got {args.size!r}")
+    if comp:
+        data["composite"] = comp
+    scene = load_dict(data, base=scene._base or os.path.dirname(os.path.abspath(args.scene)))
+
+    # 2. Trace, then composite, with a progress bar.
+    from .composite import composite
+
+    bar = Progress(args.quiet)
+    bar.begin("tracing")
+    retina = trace(scene, threads=args.threads, progress=bar.update)
+    bar.end()
+    bar.begin("compositing")
+    final = scene.to_dict()
+    options = dict(final.get("composite") or {})
+    options.setdefault("background", final["background"])
+    picture = composite(retina, **options)
+    bar.update(1, 1)
+    bar.end()
+
+    # 3. Write (each file atomically).
+    if args.retina:
+        write_exr(args.retina, retina)
+    if args.output.lower().endswith(".png"):
+        write_png(args.output, picture)
+    else:
+        write_exr(args.output, picture)
+    if not args.quiet:
+        print(f"wrote {args.output}" + (f" and {args.retina}" if args.retina else ""), file=sys.stderr)
+    return 0
+
+
+def main(argv: list[str] | None = None) -> None:
+    debug = "--debug" in (argv if argv is not None else sys.argv[1:])
+    try:
+        code = run(argv)
+    except KeyboardInterrupt:
+        sys.stderr.write("\nndtrace: interrupted\n")
+        code = 130
+    except (UsageError, ValueError, OSError) as e:
+        if debug:
+            traceback.print_exc()
+        sys.stderr.write(f"ndtrace: error: {e}\n")
+        code = 2
+    sys.exit(code)
+
+
+if __name__ == "__main__":
+    main()

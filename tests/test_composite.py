@@ -1,0 +1,244 @@
+"""Tests of ``ndtrace.composite``: retinas into 2D pictures.
+
+Expectations are computed here from the documented conventions (``ndtrace.composite``'s
+docstring, ``crates/ndtrace/src/composite.rs``):
+
+* a 3D retina (slices, rows, columns) is a cube with its longest side spanning [−1, 1], world
+  x along the columns, y up the rows (row 0 on top), z along the slices;
+* at azimuth = elevation = 0 the camera looks along +z (slice 0 nearest) with x right, y up;
+* an orthographic view's shorter side spans the cube's bounding sphere, radius = half-diagonal;
+* RGB is composited over the opaque background, alpha is the content's opacity.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import ndtrace
+
+
+@pytest.fixture(scope="module")
+def tesseract() -> ndtrace.Retina:
+    scene = ndtrace.load_file("scenes/tesseract.toml")
+    desc = scene.to_dict()
+    desc["camera"]["resolution"] = 24
+    return ndtrace.trace(ndtrace.load_dict(desc))
+
+
+def face_on_cell(shape, size, px, py):
+    """(row, column, distance to the nearest cell edge in cells) seen by the centre of pixel
+    (px, py) in a face-on orthographic view, or None outside the cube's footprint."""
+    c = 2.0 / max(shape)
+    hx, hy, hz = shape[2] * c / 2, shape[1] * c / 2, shape[0] * c / 2
+    r = math.sqrt(hx * hx + hy * hy + hz * hz)
+    pw = 2 * r / min(size)
+    x = (px + 0.5 - size[0] / 2) * pw
+    y = (size[1] / 2 - py - 0.5) * pw
+    u, v = (x + hx) / c, (hy - y) / c
+    if not (0 < u < shape[2] and 0 < v < shape[1]):
+        return None
+    edge = min(u - math.floor(u), math.ceil(u) - u, v - math.floor(v), math.ceil(v) - v)
+    return int(v), int(u), edge
+
+
+def test_first_hit_of_a_traced_tesseract_shows_the_nearest_cells(tesseract):
+    rgba = tesseract.rgba
+    shape = rgba.shape[:3]
+    assert shape == (24, 24, 24)
+    bg = (0.2, 0.3, 0.4)
+    size = (96, 80)
+    img = ndtrace.composite(tesseract, mode="first_hit", projection="orthographic", azimuth=0,
+                            elevation=0, size=size, background=bg)
+    assert img.shape == (80, 96, 4) and img.dtype == np.float32 and img.flags.c_contiguous
+    occupied = rgba[..., 3] > 0
+    background = np.array([*bg, 0.0], np.float32)
+    checked = covered = 0
+    for py in range(size[1]):
+        for px in range(size[0]):
+            cell = face_on_cell(shape, size, px, py)
+            p = img[py, px]
+            if cell is None:
+                np.testing.assert_array_equal(p, background)
+                continue
+            row, col, edge = cell
+            if edge < 1e-3:
+                continue
+            checked += 1
+            hits = np.nonzero(occupied[:, row, col])[0]
+            if len(hits) == 0:
+                np.testing.assert_array_equal(p, background)
+            else:
+                covered += 1
+                k = hits[0]  # slice 0 is nearest
+                straight = rgba[k, row, col, :3] / rgba[k, row, col, 3]
+                np.testing.assert_allclose(p, [*straight, 1.0], rtol=1e-5, atol=1e-6)
+    assert checked > 1500  # the face spans 80/√3 ≈ 46 pixels each way
+    # The tesseract fills a good part of the middle and none of the corners.
+    assert covered > 0.2 * checked
+    assert img[0, 0, 3] == 0 and img[-1, -1, 3] == 0
+
+
+def test_volume_picture_has_the_object_in_the_middle(tesseract):
+    bg = np.array([0.05, 0.1, 0.15])
+    img = ndtrace.composite(tesseract, size=(64, 48), background=bg)
+    alpha = img[..., 3]
+    assert alpha[24, 32] > 0.9
+    # Corners: background, nothing in front of it.
+    for y, x in [(0, 0), (0, 63), (47, 0), (47, 63)]:
+        np.testing.assert_allclose(img[y, x], [*bg, 0.0], atol=1e-7)
+    # The object's bounding box of covered pixels sits around the centre.
+    ys, xs = np.nonzero(alpha > 0.01)
+    assert abs((ys.min() + ys.max()) / 2 - 23.5) < 8 and abs((xs.min() + xs.max()) / 2 - 31.5) < 8
+    # RGB = C + (1 − A)·bg: with a black background the colour is C itself.
+    black = ndtrace.composite(tesseract, size=(64, 48))
+    np.testing.assert_allclose(img[..., :3], black[..., :3] + (1 - black[..., 3:]) * bg, atol=1e-6)
+    np.testing.assert_array_equal(img[..., 3], black[..., 3])
+
+
+def test_raw_arrays_and_retinas_give_the_same_picture(tesseract):
+    a = ndtrace.composite(tesseract, mode="mip", size=(40, 30))
+    b = ndtrace.composite(tesseract.rgba, mode="mip", size=(40, 30))
+    c = ndtrace.composite(tesseract.rgba.astype(np.float64).tolist(), mode="mip", size=(40, 30))
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(a, c)
+
+
+def test_depth_cue_tints_near_and_far_apart(tesseract):
+    plain = ndtrace.composite(tesseract, mode="first_hit", size=(48, 48))
+    cued = ndtrace.composite(tesseract, mode="first_hit", size=(48, 48), depth_cue=1.0)
+    hit = plain[..., 3] > 0
+    assert not np.allclose(plain[hit], cued[hit])
+    # Warm near, cool far: the red/blue ratio of cued over plain follows the cell's depth.
+    c, p = cued[hit], plain[hit]
+    ratio = (c[:, 0] / c[:, 2]) / (p[:, 0] / p[:, 2])
+    assert ratio.max() > 1.2 and ratio.min() < 1.0
+    with pytest.raises(ValueError, match="depth_cue"):
+        ndtrace.composite(tesseract.rgba, depth_cue=0.5)
+
+
+def test_opacity_lets_the_inside_show(tesseract):
+    solid = ndtrace.composite(tesseract, size=(48, 48))
+    faint = ndtrace.composite(tesseract, size=(48, 48), opacity=0.02)
+    assert faint[..., 3].max() < solid[..., 3].max()
+    assert 0 < faint[24, 24, 3] < 0.9
+
+
+def test_threads_do_not_change_the_picture(tesseract):
+    for mode in ["volume", "mip", "first_hit", "slices"]:
+        one = ndtrace.composite(tesseract, mode=mode, size=(70, 50), threads=1, opacity=0.3)
+        two = ndtrace.composite(tesseract, mode=mode, size=(70, 50), threads=2, opacity=0.3)
+        np.testing.assert_array_equal(one, two)
+
+
+def test_slices_montage_places_slice_k_at_its_tile():
+    rng = np.random.default_rng(5)
+    shape = (7, 5, 6)
+    a = (rng.random(shape) > 0.5).astype(np.float32)
+    rgba = np.stack([rng.random(shape) * a, rng.random(shape) * a, rng.random(shape) * a, a], -1)
+    rgba = rgba.astype(np.float32)
+    size = (100, 90)
+    img = ndtrace.composite(rgba, mode="slices", size=size, labels=False)
+    # The documented layout: cols = ceil(sqrt(7)) = 3, rows = 3, 1-pixel separators.
+    cols, rows, gap = 3, 3, 1
+    s = min((size[0] - (cols + 1) * gap) / (cols * 6), (size[1] - (rows + 1) * gap) / (rows * 5))
+    s = math.floor(s) if s >= 1 else s
+    tw, th = int(6 * s), int(5 * s)
+    mw, mh = cols * tw + (cols + 1) * gap, rows * th + (rows + 1) * gap
+    ox, oy = (size[0] - mw) // 2, (size[1] - mh) // 2
+    for k in range(7):
+        tx = ox + gap + (k % cols) * (tw + gap)
+        ty = oy + gap + (k // cols) * (th + gap)
+        tile = img[ty:ty + th, tx:tx + tw]
+        expect = np.repeat(np.repeat(rgba[k], s, axis=0), s, axis=1)
+        np.testing.assert_array_equal(tile, expect)
+    # The separators are opaque grey; the two empty tiles and the border are background.
+    assert img[oy, ox, 3] == 1.0 and np.allclose(img[oy, ox, :3], 0.35)
+    k = 8
+    tx, ty = ox + gap + (k % cols) * (tw + gap), oy + gap + (k // cols) * (th + gap)
+    assert np.all(img[ty:ty + th, tx:tx + tw] == 0)
+    # Labels draw into the tile's top-left corner.
+    labelled = ndtrace.composite(rgba, mode="slices", size=size)
+    assert not np.array_equal(labelled, img)
+
+
+def test_two_and_one_dimensional_retinas():
+    rgba = np.zeros((3, 5, 4), np.float32)
+    rgba[..., 0] = np.arange(15).reshape(3, 5) / 15
+    rgba[..., 3] = 1
+    native = ndtrace.composite(rgba, size=None)
+    np.testing.assert_array_equal(native, rgba)
+    big = ndtrace.composite(rgba, size=(20, 20))  # scale 4: a 20 × 12 picture at row 4
+    np.testing.assert_array_equal(big[4:16], np.repeat(np.repeat(rgba, 4, 0), 4, 1))
+    assert np.all(big[:4] == 0) and np.all(big[16:] == 0)
+    strip = ndtrace.composite(rgba[0], size=None, strip_height=7)
+    assert strip.shape == (7, 5, 4)
+    np.testing.assert_array_equal(strip, np.broadcast_to(rgba[0], (7, 5, 4)))
+
+
+def test_five_d_retina_constant_along_the_hidden_axis_reduces_to_one_slice():
+    rng = np.random.default_rng(9)
+    a = (rng.random((5, 6, 7)) > 0.6).astype(np.float32)
+    slice4 = np.stack([rng.random(a.shape) * a, rng.random(a.shape) * a, 0.5 * a, a], -1).astype(np.float32)
+    rgba5 = np.ascontiguousarray(np.broadcast_to(slice4, (4, *slice4.shape)))
+    for mode in ["volume", "first_hit", "slices"]:
+        kw = dict(mode=mode, projection="orthographic", size=(50, 40), azimuth=20, elevation=30)
+        np.testing.assert_array_equal(ndtrace.composite(rgba5, **kw), ndtrace.composite(slice4, **kw))
+    # Perspective stages shrink far slices instead; stages must match N − 4.
+    persp = ndtrace.composite(rgba5, size=(50, 40), stages=[(2.5, 3.0)])
+    assert persp.shape == (40, 50, 4)
+    with pytest.raises(ValueError, match="stages"):
+        ndtrace.composite(rgba5, stages=[(2.5, 3.0), (2.5, 3.0)])
+
+
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        (dict(mode="volumes"), "mode"),
+        (dict(projection="fisheye"), "projection"),
+        (dict(size=(0, 10)), "size"),
+        (dict(size=(10,)), "size"),
+        (dict(size=(10.5, 10)), "size"),
+        (dict(background=(1, 2)), "background"),
+        (dict(background=(0, float("nan"), 0)), "background"),
+        (dict(azimuth=float("nan")), "azimuth"),
+        (dict(elevation=float("inf")), "elevation"),
+        (dict(distance=0.9), "distance"),
+        (dict(opacity=-0.1), "opacity"),
+        (dict(depth_cue=1.5), "depth_cue"),
+        (dict(mode="slices", axis=3), "axis"),
+        (dict(axis=-1), "axis"),
+        (dict(step=0), "step"),
+        (dict(zoom=0), "zoom"),
+        (dict(threads=0), "threads"),
+        (dict(strip_height=0), "strip_height"),
+        (dict(stages=[(1.0,)]), "stages"),
+        (dict(azimuth="30"), "azimuth"),
+    ],
+)
+def test_bad_options_raise_value_errors_naming_the_argument(kwargs, name):
+    rgba = np.zeros((4, 4, 4, 4), np.float32)
+    with pytest.raises(ValueError, match=name):
+        ndtrace.composite(rgba, **kwargs)
+
+
+@pytest.mark.parametrize(
+    "retina",
+    [np.zeros((4, 4, 3), np.float32), np.zeros((4,), np.float32), np.zeros((1,) * 8 + (4,), np.float32),
+     "retina.npz", None, np.array([["a", "b", "c", "d"]])],
+)
+def test_bad_retinas_raise_value_errors(retina):
+    with pytest.raises(ValueError, match="retina"):
+        ndtrace.composite(retina)
+
+
+def test_the_binding_checks_shapes_too():
+    # The compiled kernel re-checks what the wrapper checks, naming the argument.
+    with pytest.raises(ValueError, match="depth"):
+        ndtrace._ndtrace.composite(np.zeros((2, 2, 2, 4), np.float32), np.zeros((2, 2), np.float32))
+    with pytest.raises(ValueError, match="retina"):
+        ndtrace._ndtrace.composite(np.zeros((2, 2, 2, 3), np.float32))
+    with pytest.raises(ValueError, match="mode"):
+        ndtrace._ndtrace.composite(np.zeros((2, 2, 2, 4), np.float32), mode="x")

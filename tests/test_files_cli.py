@@ -1,0 +1,199 @@
+"""EXR/PNG files (against the official OpenEXR package) and the ``ndtrace`` command line."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import ndtrace
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+OpenEXR = pytest.importorskip("OpenEXR")
+
+
+def small_scene(dim: int, res: int = 8) -> ndtrace.Scene:
+    d = {
+        "dim": dim,
+        "camera": {"position": [0.3] * (dim - 1) + [4.0], "look_at": [0.0] * dim,
+                   "up": [[1.0 if i == k + 1 else 0.0 for i in range(dim)] for k in range(dim - 2)],
+                   "fov": 50, "resolution": res},
+        "lights": [{"type": "directional", "direction": [0.2] * (dim - 1) + [1.0]}],
+        "objects": [{"shape": "hypercube", "transform": [{"scale": 0.8}]}],
+    }
+    return ndtrace.load_dict(d)
+
+
+@pytest.mark.parametrize("dim", [2, 3, 4, 5])
+def test_retinas_round_trip_through_exr(tmp_path, dim):
+    r = ndtrace.trace(small_scene(dim))
+    assert r.hit.any()
+    path = tmp_path / "r.exr"
+    ndtrace.write_exr(path, r)
+    back = ndtrace.read_exr(path)
+    assert isinstance(back, ndtrace.Retina) and back.shape == r.shape and back.dim == dim
+    for k in ("rgba", "depth", "normal", "object_id", "primitive_id"):
+        np.testing.assert_array_equal(getattr(back, k), getattr(r, k), err_msg=k)
+    assert "[camera]" in back.camera
+
+
+def test_retina_files_open_in_openexr_with_the_same_values(tmp_path):
+    r = ndtrace.trace(small_scene(4, res=6))
+    path = tmp_path / "r.exr"
+    ndtrace.write_exr(path, r)
+    f = OpenEXR.File(str(path), separate_channels=True)
+    assert len(f.parts) == r.shape[0]  # one part per 2D slice, nothing else
+    for k, part in enumerate(f.parts):
+        ch = part.channels
+        for c, name in enumerate("RGBA"):
+            np.testing.assert_array_equal(ch[name].pixels, r.rgba[k, ..., c])
+        np.testing.assert_array_equal(ch["Z"].pixels, r.depth[k])
+        for a in range(4):
+            np.testing.assert_array_equal(ch[f"N.{a}"].pixels, r.normal[k, ..., a])
+        np.testing.assert_array_equal(ch["objectId"].pixels.astype(np.int64) - 1, r.object_id[k])
+        pid = (ch["primitiveId.hi"].pixels.astype(np.int64) << 32) | ch["primitiveId.lo"].pixels.astype(np.int64)
+        np.testing.assert_array_equal(pid - 1, r.primitive_id[k])
+        assert part.header["ndtrace.dim"] == 4
+        assert part.header["ndtrace.retinaShape"] == "6,6,6"
+        assert part.header["ndtrace.slice"] == k
+        assert "ZIP" in str(part.header["compression"]).upper()
+
+
+def test_pictures_round_trip_and_openexr_files_read_in_ndtrace(tmp_path):
+    rng = np.random.default_rng(5)
+    img = rng.random((7, 9, 4)).astype(np.float32)
+    depth = rng.random((7, 9)).astype(np.float32)
+    p = tmp_path / "img.exr"
+    ndtrace.write_exr(p, img, depth=depth)
+    np.testing.assert_array_equal(ndtrace.read_exr(p), img)
+    f = OpenEXR.File(str(p), separate_channels=True)
+    np.testing.assert_array_equal(f.parts[0].channels["G"].pixels, img[..., 1])
+    np.testing.assert_array_equal(f.parts[0].channels["Z"].pixels, depth)
+    # An RGB file written by OpenEXR itself (no alpha: reads as opaque).
+    rgb = rng.random((5, 6, 3)).astype(np.float32)
+    q = tmp_path / "openexr.exr"
+    OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
+                 {"RGB": rgb}).write(str(q))
+    back = ndtrace.read_exr(q)
+    np.testing.assert_array_equal(back[..., :3], rgb)
+    np.testing.assert_array_equal(back[..., 3], 1.0)
+
+
+def test_png_is_8_bit_srgb_with_straight_alpha(tmp_path):
+    from PIL import Image
+
+    img = np.zeros((2, 3, 4), np.float32)
+    img[0, 0] = [0.5, 0.5, 0.5, 1.0]  # linear 0.5 → sRGB 188
+    img[0, 1] = [0.25, 0.0, 0.0, 0.5]  # premultiplied: straight red 0.5 at alpha 0.5
+    p = tmp_path / "x.png"
+    ndtrace.write_png(p, img)
+    with Image.open(p) as im:
+        a = np.asarray(im.convert("RGBA"))
+    assert a.shape == (2, 3, 4)
+    assert tuple(a[0, 0]) == (188, 188, 188, 255)
+    assert tuple(a[0, 1]) == (188, 0, 0, 128)
+    assert tuple(a[1, 2]) == (0, 0, 0, 0)
+
+
+def test_bad_files_and_paths_are_clear_errors(tmp_path):
+    junk = tmp_path / "junk.exr"
+    junk.write_bytes(b"not an exr at all")
+    with pytest.raises(OSError, match="not a readable OpenEXR file"):
+        ndtrace.read_exr(junk)
+    with pytest.raises(OSError, match="cannot read"):
+        ndtrace.read_exr(tmp_path / "missing.exr")
+    with pytest.raises(ValueError, match="unknown extension"):
+        ndtrace.write_exr(tmp_path / "x.tiff", np.zeros((2, 2, 4)))
+    with pytest.raises(OSError, match="does not exist"):
+        ndtrace.write_png(tmp_path / "nope" / "x.png", np.zeros((2, 2, 4)))
+    with pytest.raises(ValueError, match=r"image: expected an image of shape \(H, W, 4\)"):
+        ndtrace.write_png(tmp_path / "x.png", np.zeros((2, 2, 3)))
+
+
+def test_a_failed_write_leaves_the_old_file(tmp_path):
+    target = tmp_path / "keep.png"
+    target.write_bytes(b"precious")
+    with pytest.raises(ValueError):
+        ndtrace.write_png(target, np.full((2, 2, 4), np.nan))
+    assert target.read_bytes() == b"precious"
+    assert [p.name for p in tmp_path.iterdir()] == ["keep.png"]
+
+
+# -- the command line ------------------------------------------------------------------
+
+
+def cli(*args, **kw) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "ndtrace.cli", *args], capture_output=True,
+                          text=True, cwd=kw.pop("cwd", ROOT), timeout=kw.pop("timeout", 120), **kw)
+
+
+def test_cli_renders_a_scene_to_png_and_exr(tmp_path):
+    out, ret = tmp_path / "t.png", tmp_path / "r.exr"
+    p = cli("scenes/tesseract.toml", "-o", str(out), "--retina", str(ret), "--resolution", "16",
+            "--size", "64x48", "--quiet")
+    assert p.returncode == 0, p.stderr
+    from PIL import Image
+
+    with Image.open(out) as im:
+        assert im.size == (64, 48)
+    r = ndtrace.read_exr(ret)
+    assert r.shape == (16, 16, 16) and r.hit.any()
+    p = cli("scenes/cube.toml", "-o", str(tmp_path / "c.exr"), "--resolution", "24", "--size", "48x48",
+            "--quiet")
+    assert p.returncode == 0, p.stderr
+    img = ndtrace.read_exr(tmp_path / "c.exr")
+    assert img.shape == (48, 48, 4)
+    assert img[24, 24, 3] == 1.0 and img[0, 0, 3] == 0.0  # the cube in the middle, background around
+
+
+def test_cli_errors_are_one_line_with_exit_status_2(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text((open(os.path.join(ROOT, "scenes", "cube.toml")).read())
+                   .replace('shape = "hypercube"', 'shape = "hypercub"'))
+    p = cli(str(bad), "-o", str(tmp_path / "x.png"))
+    assert p.returncode == 2
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1, p.stderr
+    line_no = next(i for i, l in enumerate(bad.read_text().splitlines(), 1) if "hypercub" in l)
+    assert lines[0].startswith(f"ndtrace: error: {bad}:{line_no}:9: objects[0].shape: unknown shape "
+                               '"hypercub" (did you mean "hypercube"?)'), lines[0]
+    assert not (tmp_path / "x.png").exists()
+    p = cli("scenes/cube.toml", "-o", str(tmp_path / "x.jpg"))
+    assert p.returncode == 2 and "unknown extension" in p.stderr and "Traceback" not in p.stderr
+    p = cli("scenes/cube.toml", "-o", str(tmp_path / "no" / "x.png"))
+    assert p.returncode == 2 and "does not exist" in p.stderr
+    p = cli("scenes/missing.toml", "-o", str(tmp_path / "x.png"))
+    assert p.returncode == 2 and "no such file" in p.stderr
+    p = cli(str(bad), "-o", str(tmp_path / "x.png"), "--debug")
+    assert p.returncode == 2 and "Traceback" in p.stderr
+
+
+def test_cli_version_and_help():
+    p = cli("--version")
+    assert p.returncode == 0 and p.stdout.strip() == f"ndtrace {ndtrace.__version__}"
+    p = cli("--help")
+    assert p.returncode == 0 and "ndtrace scenes/tesseract.toml -o tesseract.png" in p.stdout
+
+
+def test_cli_ctrl_c_stops_quickly_and_leaves_no_output(tmp_path):
+    out = tmp_path / "t.png"
+    out.write_bytes(b"previous picture")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ndtrace.cli", "scenes/sphere3.toml", "-o", str(out),
+         "--resolution", "200", "--samples", "4", "--threads", "1"],
+        cwd=ROOT, stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    # Wait for the progress bar: the scene is validated and tracing has begun.
+    time.sleep(3.0)
+    assert proc.poll() is None, proc.communicate()
+    t = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    proc.wait(timeout=10)
+    assert time.monotonic() - t < 1.5
+    assert proc.returncode == 130, proc.stderr.read()
+    assert out.read_bytes() == b"previous picture"
+    assert [p.name for p in tmp_path.iterdir()] == ["t.png"]
