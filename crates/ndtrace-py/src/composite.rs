@@ -92,22 +92,7 @@ fn composite<'py>(
         strip_height,
         labels,
     };
-    let pool = match threads {
-        Some(0) => {
-            return Err(PyValueError::new_err(
-                "threads: must be at least 1 (or None for every core)",
-            ))
-        }
-        Some(k) => Some(
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(k)
-                .build()
-                .map_err(|e| {
-                    PyValueError::new_err(format!("threads: cannot start {k} threads: {e}"))
-                })?,
-        ),
-        None => None,
-    };
+    let pool = crate::thread_pool(threads)?;
     let run = || core::composite(rgba, depth, &shape, &opts);
     let image = py
         .detach(|| match &pool {

@@ -91,31 +91,10 @@ fn read_exr(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict>> {
     let d = PyDict::new(py);
     match contents {
         ExrContents::Retina(r, camera) => {
+            let d = crate::scene::retina_dict(py, r)?;
             d.set_item("kind", "retina")?;
             d.set_item("camera", camera)?;
-            let shape = r.shape.clone();
-            let with = |extra: usize| -> Vec<usize> {
-                let mut s = shape.clone();
-                if extra > 0 {
-                    s.push(extra);
-                }
-                s
-            };
-            d.set_item("dim", r.dim)?;
-            d.set_item("rgba", PyArray1::from_vec(py, r.rgba).reshape(with(4))?)?;
-            d.set_item("depth", PyArray1::from_vec(py, r.depth).reshape(with(0))?)?;
-            d.set_item(
-                "normal",
-                PyArray1::from_vec(py, r.normal).reshape(with(r.dim))?,
-            )?;
-            d.set_item(
-                "object_id",
-                PyArray1::from_vec(py, r.object_id).reshape(with(0))?,
-            )?;
-            d.set_item(
-                "primitive_id",
-                PyArray1::from_vec(py, r.primitive_id).reshape(with(0))?,
-            )?;
+            return Ok(d);
         }
         ExrContents::Picture(p) => {
             d.set_item("kind", "picture")?;

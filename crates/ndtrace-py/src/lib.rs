@@ -11,6 +11,25 @@ mod files;
 mod geometry;
 mod scene;
 
+/// A rayon pool of `threads` workers, or `None` (the global pool, every core) for `None`.
+pub(crate) fn thread_pool(threads: Option<usize>) -> PyResult<Option<rayon::ThreadPool>> {
+    match threads {
+        Some(0) => Err(pyo3::exceptions::PyValueError::new_err(
+            "threads: must be at least 1 (or None for every core)",
+        )),
+        Some(k) => rayon::ThreadPoolBuilder::new()
+            .num_threads(k)
+            .build()
+            .map(Some)
+            .map_err(|e| {
+                pyo3::exceptions::PyValueError::new_err(format!(
+                    "threads: cannot start {k} threads: {e}"
+                ))
+            }),
+        None => Ok(None),
+    }
+}
+
 /// The compiled part of ndtrace. Use the `ndtrace` package, not this module.
 #[pymodule]
 fn _ndtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {

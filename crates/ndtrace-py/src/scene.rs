@@ -89,22 +89,7 @@ impl CompiledScene {
         threads: Option<usize>,
         callback: Option<Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        if threads == Some(0) {
-            return Err(PyValueError::new_err(
-                "threads: must be at least 1 (or None for every core)",
-            ));
-        }
-        let pool = match threads {
-            Some(k) => Some(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(k)
-                    .build()
-                    .map_err(|e| {
-                        PyValueError::new_err(format!("threads: cannot start {k} threads: {e}"))
-                    })?,
-            ),
-            None => None,
-        };
+        let pool = crate::thread_pool(threads)?;
         let total = with_scene!(&self.scene, s, _N => s.camera.cell_count());
         let progress = Progress::default();
         let scene = &self.scene;
@@ -154,7 +139,7 @@ impl CompiledScene {
     }
 }
 
-fn retina_dict(py: Python<'_>, r: Retina) -> PyResult<Bound<'_, PyDict>> {
+pub(crate) fn retina_dict(py: Python<'_>, r: Retina) -> PyResult<Bound<'_, PyDict>> {
     let d = PyDict::new(py);
     let shape = r.shape.clone();
     let with = |extra: usize| -> Vec<usize> {
