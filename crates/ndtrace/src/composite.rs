@@ -808,57 +808,25 @@ impl Grid {
         t1: f64,
         mut seg: impl FnMut(f64, f64) -> bool,
     ) {
-        let bs = BLOCK as f64;
-        let p = o + d * t0;
-        let mut cell = [0i64; 3];
-        let mut step = [0i64; 3];
-        let mut t_max = [f64::INFINITY; 3];
-        let mut t_delta = [f64::INFINITY; 3];
-        for k in 0..3 {
-            let last = self.blocks[k] as i64 - 1;
-            cell[k] = ((p[k] / bs).floor() as i64).clamp(0, last);
-            if d[k] > 0.0 {
-                step[k] = 1;
-                t_delta[k] = bs / d[k];
-                t_max[k] = t0 + ((cell[k] + 1) as f64 * bs - p[k]) / d[k];
-            } else if d[k] < 0.0 {
-                step[k] = -1;
-                t_delta[k] = -bs / d[k];
-                t_max[k] = t0 + (cell[k] as f64 * bs - p[k]) / d[k];
-            }
-        }
         let mut run: Option<f64> = None;
-        let mut t = t0;
-        loop {
-            let b = cell[0] as usize
-                + self.blocks[0] * (cell[1] as usize + self.blocks[1] * cell[2] as usize);
-            let k = if t_max[0] <= t_max[1] && t_max[0] <= t_max[2] {
-                0
-            } else if t_max[1] <= t_max[2] {
-                1
-            } else {
-                2
-            };
-            let exit = t_max[k].min(t1);
+        let mut stopped = false;
+        walk_cells(o, d, t0, t1, BLOCK as f64, self.blocks, |c, t_in| {
+            let b = c[0] + self.blocks[0] * (c[1] + self.blocks[1] * c[2]);
             match (self.occupied[b], run) {
-                (true, None) => run = Some(t),
+                (true, None) => run = Some(t_in),
                 (false, Some(ta)) => {
-                    if seg(ta, t) {
-                        return;
+                    if seg(ta, t_in) {
+                        stopped = true;
+                        return true;
                     }
                     run = None;
                 }
                 _ => {}
             }
-            cell[k] += step[k];
-            if exit >= t1 || cell[k] < 0 || cell[k] >= self.blocks[k] as i64 {
-                if let Some(ta) = run {
-                    seg(ta, t1);
-                }
-                return;
-            }
-            t = exit;
-            t_max[k] += t_delta[k];
+            false
+        });
+        if let (false, Some(ta)) = (stopped, run) {
+            seg(ta, t1);
         }
     }
 }
@@ -1046,26 +1014,45 @@ fn traverse(
     t1: f64,
     mut visit: impl FnMut([f32; 4]) -> bool,
 ) {
+    walk_cells(o, d, t0, t1, 1.0, grid.n, |c, _| {
+        visit(grid.cell(c[0], c[1], c[2]))
+    });
+}
+
+/// The 3D digital differential analyzer (Amanatides–Woo) over a grid of `dims` cubic cells of
+/// side `size`: calls `visit(cell, t_enter)` for every cell the ray `o + t·d` crosses in
+/// [t0, t1], nearest first, until `visit` returns true or the ray leaves [t0, t1] or the grid.
+fn walk_cells(
+    o: DVec3,
+    d: DVec3,
+    t0: f64,
+    t1: f64,
+    size: f64,
+    dims: [usize; 3],
+    mut visit: impl FnMut([usize; 3], f64) -> bool,
+) {
     let p = o + d * t0;
     let mut cell = [0i64; 3];
     let mut step = [0i64; 3];
     let mut t_max = [f64::INFINITY; 3];
     let mut t_delta = [f64::INFINITY; 3];
     for k in 0..3 {
-        let last = grid.n[k] as i64 - 1;
-        cell[k] = (p[k].floor() as i64).clamp(0, last);
+        let last = dims[k] as i64 - 1;
+        cell[k] = ((p[k] / size).floor() as i64).clamp(0, last);
         if d[k] > 0.0 {
             step[k] = 1;
-            t_delta[k] = 1.0 / d[k];
-            t_max[k] = t0 + ((cell[k] + 1) as f64 - p[k]) / d[k];
+            t_delta[k] = size / d[k];
+            t_max[k] = t0 + ((cell[k] + 1) as f64 * size - p[k]) / d[k];
         } else if d[k] < 0.0 {
             step[k] = -1;
-            t_delta[k] = -1.0 / d[k];
-            t_max[k] = t0 + (cell[k] as f64 - p[k]) / d[k];
+            t_delta[k] = -size / d[k];
+            t_max[k] = t0 + (cell[k] as f64 * size - p[k]) / d[k];
         }
     }
+    let mut t = t0;
     loop {
-        if visit(grid.cell(cell[0] as usize, cell[1] as usize, cell[2] as usize)) {
+        let here = [cell[0] as usize, cell[1] as usize, cell[2] as usize];
+        if visit(here, t) {
             return;
         }
         let k = if t_max[0] <= t_max[1] && t_max[0] <= t_max[2] {
@@ -1079,9 +1066,10 @@ fn traverse(
             return;
         }
         cell[k] += step[k];
-        if cell[k] < 0 || cell[k] >= grid.n[k] as i64 {
+        if cell[k] < 0 || cell[k] >= dims[k] as i64 {
             return;
         }
+        t = t_max[k];
         t_max[k] += t_delta[k];
     }
 }
