@@ -319,14 +319,37 @@ pub enum ScaleDesc {
     PerAxis(Vec<f64>),
 }
 
-/// A rotation.
+/// A rotation, in one of three forms (exactly one of `plane`, `quaternions`, `rolling`):
+///
+/// * `{ plane = [i, j], degrees = θ }`: the course's R_ij turning axis i toward axis j
+///   (rotations paper, eq. 6);
+/// * `{ quaternions = [q, p] }` (dim = 4): the rotation v ↦ q·v·p̄ of unit quaternions
+///   (notes, "Quaternion form in 4D");
+/// * `{ rolling = [d_1, …, d_{N−1}], radius = R, angle = "course" | "arc" }`: the rolling ball
+///   M_N (rotations paper, eq. 5) for a controller displacement d.
+///
+/// Which keys go together is checked when the scene is built, so errors name the field.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RotateDesc {
-    /// The course's R_ij turning axis i toward axis j (axes numbered from 0).
-    pub plane: [usize; 2],
-    /// Angle in degrees.
-    pub degrees: f64,
+    /// Plane form: the axes [i, j] (numbered from 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plane: Option<[usize; 2]>,
+    /// Plane form: the angle in degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub degrees: Option<f64>,
+    /// Double-quaternion form (dim = 4): [q, p], two unit quaternions [q0, q1, q2, q3].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quaternions: Option<Vec<Vec<f64>>>,
+    /// Rolling-ball form: the controller displacement, N − 1 numbers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rolling: Option<Vec<f64>>,
+    /// Rolling-ball form: the ball radius R (> 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    /// Rolling-ball form: `"course"` (c = R/D, s = r/D; the default) or `"arc"` (θ = r/R).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angle: Option<crate::rotation::RollingAngle>,
 }
 
 /// One step of an object transform.
@@ -337,7 +360,7 @@ pub enum TransformDesc {
     Scale(ScaleDesc),
     /// Translate by a vector.
     Translate(Vec<f64>),
-    /// Rotate in a coordinate plane (rotations paper, eq. 6).
+    /// Rotate: in a coordinate plane, by a pair of quaternions (4D) or by the rolling ball.
     Rotate(RotateDesc),
     /// N×N linear or (N+1)×(N+1) affine matrix (rows).
     Matrix(Vec<Vec<f64>>),
