@@ -7,6 +7,7 @@
 from . import _ndtrace
 from . import geometry
 from . import rotation
+from . import frames
 from .retina import Retina, trace
 from .composite import composite
 from .files import read_exr, write_exr, write_png
@@ -17,6 +18,6 @@ MIN_DIM: int = _ndtrace.MIN_DIM
 MAX_DIM: int = _ndtrace.MAX_DIM
 
 __all__ = [
-    "geometry", "rotation", "Scene", "Retina", "trace", "composite", "read_exr", "write_exr", "write_png", "load_file", "load_dict", "load_toml",
+    "geometry", "rotation", "frames", "Scene", "Retina", "trace", "composite", "read_exr", "write_exr", "write_png", "load_file", "load_dict", "load_toml",
     "MIN_DIM", "MAX_DIM", "__version__",
 ]
