@@ -162,7 +162,7 @@ fn coefficient(c: &Coefficient, path: &str) -> R<Rgb> {
     }
 }
 
-fn matrix_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<Matrix<N>> {
+pub(crate) fn matrix_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<Matrix<N>> {
     if rows.len() != N {
         return Err(PathError::new(
             path,
@@ -835,6 +835,9 @@ pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N
             material(&o.material, &format!("{p}.material"))?,
             transform::<N>(&o.transform, &format!("{p}.transform"))?,
         ));
+    }
+    if let Some(a) = &desc.animation {
+        super::animation::check::<N>(a, desc.objects.len())?;
     }
     // 2. Meshes in world space. A transform that reverses handedness (det < 0) would turn
     //    outward normals inward (normals are pseudotensors), so such simplices are reordered to

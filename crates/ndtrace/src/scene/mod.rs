@@ -1,6 +1,7 @@
 //! Scenes: the shared description ([`desc`]), its loaders (TOML here, Python dicts in the
 //! bindings), located errors ([`errors`]) and the build into a traceable [`Scene<N>`].
 
+pub mod animation;
 pub mod build;
 pub mod desc;
 pub mod errors;
@@ -156,6 +157,12 @@ pub fn load_file(path: &Path) -> NdResult<(SceneDesc, AnyScene)> {
 /// Builds an already deserialized description, locating errors with `name` only.
 pub fn build_desc(desc: &SceneDesc, name: &str, base: Option<&Path>) -> NdResult<AnyScene> {
     build_any(desc, base).map_err(|e| locate(&Source::Unlocated(name), None, e))
+}
+
+/// The description of frame `k` of the scene's `[animation]` (see [`animation`]); errors are
+/// prefixed with `name`.
+pub fn animation_frame(desc: &SceneDesc, k: u32, name: &str) -> NdResult<SceneDesc> {
+    animation::frame_desc(desc, k).map_err(|e| locate(&Source::Unlocated(name), None, e))
 }
 
 /// Serializes a description as TOML (the inverse of [`load_toml_str`] for the description).
