@@ -83,7 +83,11 @@ def test_animate_writes_numbered_frames_and_a_looping_gif(tmp_path):
                             composite={"size": [64, 48]}, progress=lambda d, t: calls.append((d, t)))
     pngs = [str(tmp_path / f"spin_{k:04d}.png") for k in range(1, 6)]
     assert paths == pngs + [str(tmp_path / "spin.gif")]
-    assert calls == [(k, 5) for k in range(1, 6)]
+    cells = 48 ** 3
+    assert calls[-1] == (5 * cells, 5 * cells)
+    assert all(t == 5 * cells for _, t in calls)
+    assert [d for d, _ in calls] == sorted(d for d, _ in calls), "progress only grows"
+    assert {k * cells for k in range(1, 6)} <= {d for d, _ in calls}
     frames = [np.asarray(Image.open(p)) for p in pngs]
     assert all(f.shape == (48, 64, 4) for f in frames)
     assert any(not np.array_equal(frames[0], f) for f in frames[1:]), "the tesseract turns"
@@ -109,9 +113,10 @@ def test_video_choices(tmp_path):
         str(tmp_path / "a_0001.png"), str(tmp_path / "a_0002.png")]
     assert not (tmp_path / "a.gif").exists()
     assert ndtrace.animate(scene, tmp_path / "b.gif", composite=small)[-1] == str(tmp_path / "b.gif")
-    assert frame_paths("x/out.mp4", 12345) == ["x/out_00001.png"] + [
-        f"x/out_{k:05d}.png" for k in range(2, 12346)][:0] + frame_paths("x/out.mp4", 12345)[1:]
-    assert frame_paths("x/out.mp4", 12345)[-1] == "x/out_12345.png"
+    many = frame_paths("x/out.mp4", 12345)
+    assert (len(many), many[0], many[1], many[-1]) == (12345, "x/out_00001.png", "x/out_00002.png",
+                                                       "x/out_12345.png")
+    assert frame_paths("out.png", 3) == ["out_0001.png", "out_0002.png", "out_0003.png"]
     try:
         import imageio_ffmpeg  # noqa: F401
     except ImportError:
@@ -163,8 +168,40 @@ def test_bad_arguments(tmp_path):
         ndtrace.animate(scene, tmp_path / "x.exr")
     with pytest.raises(ValueError, match="folder .* does not exist"):
         ndtrace.animate(scene, tmp_path / "no" / "x.png")
+    three = scene4({"frames": 3, "sweep": {"plane": [0, 3], "degrees": [0, 1]}})
     with pytest.raises(ValueError, match="frame 7 does not exist"):
-        frame_scene(scene4({"frames": 3, "sweep": {"plane": [0, 3], "degrees": [0, 1]}}), 7)
+        frame_scene(three, 7)
+    for k in (-1, 2**40, 1.5, True):
+        with pytest.raises(ValueError, match="k: expected a frame index"):
+            frame_scene(three, k)
+    with pytest.raises(ValueError, match="animation.frames: integer out of range"):
+        ndtrace.animate(scene, tmp_path / "x.png", animation={"frames": -2, "sweep": {"plane": [0, 3], "degrees": [0, 1]}})
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_gif_too_large_for_memory_is_refused_before_any_work(tmp_path, monkeypatch):
+    monkeypatch.setattr(ndtrace.animation, "GIF_MEMORY_LIMIT", 10 * 16 * 16)
+    scene = scene4({"frames": 11, "sweep": {"plane": [0, 3], "degrees": [0, 1]}}, res=4)
+    with pytest.raises(ValueError, match="a GIF of 11 frames of 16×16 would hold .* write an MP4"):
+        ndtrace.animate(scene, tmp_path / "x.gif", composite={"size": [16, 16]})
+    assert os.listdir(tmp_path) == []
+    assert len(ndtrace.animate(scene, tmp_path / "x.png", frames=10, composite={"size": [16, 16]})) == 11
+
+
+@pytest.mark.parametrize("output", ["stop.gif", "stop.mp4"])
+def test_ctrl_c_keeps_finished_frames_and_leaves_no_video(tmp_path, output):
+    if output.endswith(".mp4"):
+        pytest.importorskip("imageio_ffmpeg")
+    scene = scene4({"frames": 4, "sweep": {"plane": [0, 3], "degrees": [0, 30]}}, res=6)
+    cells = 6 ** 3
+
+    def interrupt(done, total):
+        if done > 2 * cells:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        ndtrace.animate(scene, tmp_path / output, composite={"size": [16, 16]}, progress=interrupt)
+    assert sorted(os.listdir(tmp_path)) == ["stop_0001.png", "stop_0002.png"]
 
 
 def test_the_animation_table_round_trips_through_toml():
@@ -229,3 +266,12 @@ def test_slerp_and_rolling_frames_match_ndtrace_rotation():
                           for a, b in zip(path, path[1:])])
     np.testing.assert_allclose(m[:4, :4], r, atol=1e-12)
     np.testing.assert_allclose(m[:4, 4], np.array([0, 0, 0, 1]) - r @ [0, 0, 0, 1], atol=1e-12)
+    # Frame 1 (t = ½) is half the path length: segment lengths 0.5 and √0.29, so the controller
+    # has gone all of the first and a part f of the second.
+    second = np.subtract(path[2], path[1])
+    total = 0.5 + np.linalg.norm(second)
+    f = (total / 2 - 0.5) / np.linalg.norm(second)
+    half = rotation.compose([rotation.rolling_ball([0.5, 0, 0], 0.8, angle="arc"),
+                             rotation.rolling_ball(f * second, 0.8, angle="arc")])
+    m = np.array(frame_scene(anim, 1).to_dict()["objects"][0]["transform"][-1]["matrix"])
+    np.testing.assert_allclose(m[:4, :4], half, atol=1e-12)

@@ -7,7 +7,7 @@ The ``[animation]`` table (``docs/scene-format.md``) names one rotation — a pl
 table drives ``ndtrace.animate``, the CLI's ``--frames`` and scripts::
 
     scene = ndtrace.load_file("scenes/tesseract_spin.toml")
-    ndtrace.animate(scene, "spin.png")            # spin_0001.png … spin_0048.png + spin.gif
+    ndtrace.animate(scene, "spin.png")            # spin_0001.png … spin_0024.png + spin.gif
     ndtrace.animate(scene, "spin.gif", frames=12, animation={"sweep": {"plane": [1, 3],
                     "degrees": [0, 90]}})
 """
@@ -20,12 +20,12 @@ from typing import Callable
 
 import numpy as np
 
-from .composite import composite as _composite
+from .composite import composite as _composite, scene_options
 from .files import to_srgb8, write_png
 from .retina import trace
 from .scene import Scene, load_dict
 
-__all__ = ["animate", "frame_scene", "frame_paths", "gif_frame_ms"]
+__all__ = ["animate", "frame_scene", "frame_paths", "gif_frame_ms", "GIF_MEMORY_LIMIT"]
 
 VIDEOS = ("gif", "mp4", None)
 
@@ -52,7 +52,7 @@ def _table(scene: Scene, animation: dict | None, frames: int | None) -> Scene:
 
 def frame_scene(scene: Scene, k: int) -> Scene:
     """Frame ``k`` (0-based) of the scene's animation, as a still :class:`Scene`."""
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 0:
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < 2**32:
         raise ValueError(f"k: expected a frame index ≥ 0, got {k!r}")
     return load_dict(scene.compiled().animation_frame(int(k)), base=scene._base)
 
@@ -92,45 +92,61 @@ def gif_frame_ms(fps: float) -> int:
     return 10 * max(2, round(100.0 / fps))
 
 
-def _write_gif(path: str, frames: list[np.ndarray], fps: float) -> None:
-    from PIL import Image
-
-    images = [Image.fromarray(f, "RGB") for f in frames]
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".ndtrace-", suffix=".gif", dir=folder)
-    os.close(fd)
-    try:
-        images[0].save(tmp, format="GIF", save_all=True, append_images=images[1:],
-                       duration=gif_frame_ms(fps), loop=0)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+#: Largest memory (bytes) the GIF's palette frames may take: a GIF is written at the end, so its
+#: frames are held (one byte per pixel each); longer animations need MP4 or PNG frames only.
+GIF_MEMORY_LIMIT = 1 << 30
 
 
-def _write_mp4(path: str, frames: list[np.ndarray], fps: float) -> None:
-    import imageio_ffmpeg
+class _Video:
+    """A GIF or MP4 written frame by frame into a temporary file beside ``path``, renamed
+    into place by :meth:`finish` and removed by :meth:`abort` (nothing half-written remains)."""
 
-    h, w = frames[0].shape[:2]
-    # yuv420p needs even sides: repeat the last row/column where needed.
-    ph, pw = h + h % 2, w + w % 2
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".ndtrace-", suffix=".mp4", dir=folder)
-    os.close(fd)
-    try:
-        writer = imageio_ffmpeg.write_frames(tmp, (pw, ph), fps=fps, codec="libx264",
-                                             pix_fmt_out="yuv420p", macro_block_size=2,
-                                             output_params=["-y"])
-        writer.send(None)
-        for f in frames:
-            f = np.pad(f, ((0, ph - h), (0, pw - w), (0, 0)), mode="edge")
-            writer.send(np.ascontiguousarray(f).tobytes())
-        writer.close()
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    def __init__(self, kind: str, path: str, fps: float) -> None:
+        self.kind, self.path, self.fps = kind, path, fps
+        folder = os.path.dirname(os.path.abspath(path))
+        fd, self.tmp = tempfile.mkstemp(prefix=".ndtrace-", suffix="." + kind, dir=folder)
+        os.close(fd)
+        self.frames: list = []  # GIF: palette images
+        self.writer = None  # MP4: imageio-ffmpeg's generator
+        self.size: tuple[int, int] | None = None
+
+    def add(self, rgb: np.ndarray) -> None:
+        h, w = rgb.shape[:2]
+        if self.kind == "gif":
+            from PIL import Image
+
+            self.frames.append(Image.fromarray(rgb, "RGB").quantize(256, dither=Image.Dither.NONE))
+            return
+        import imageio_ffmpeg
+
+        # yuv420p needs even sides: repeat the last row/column where needed.
+        ph, pw = h + h % 2, w + w % 2
+        if self.writer is None:
+            self.size = (pw, ph)
+            self.writer = imageio_ffmpeg.write_frames(
+                self.tmp, (pw, ph), fps=self.fps, codec="libx264", pix_fmt_out="yuv420p",
+                macro_block_size=2, output_params=["-y"])
+            self.writer.send(None)
+        padded = np.pad(rgb, ((0, ph - h), (0, pw - w), (0, 0)), mode="edge")
+        self.writer.send(np.ascontiguousarray(padded).tobytes())
+
+    def finish(self) -> None:
+        if self.kind == "gif":
+            first, *rest = self.frames
+            first.save(self.tmp, format="GIF", save_all=True, append_images=rest,
+                       duration=gif_frame_ms(self.fps), loop=0)
+        else:
+            self.writer.close()
+        os.replace(self.tmp, self.path)
+
+    def abort(self) -> None:
+        if self.writer is not None:
+            try:
+                self.writer.close()
+            except Exception:  # noqa: BLE001 - the original error matters more
+                pass
+        if os.path.exists(self.tmp):
+            os.unlink(self.tmp)
 
 
 def animate(
@@ -151,8 +167,10 @@ def animate(
     ``out.mp4`` (the numbered PNG frames are written beside it as well). ``animation`` replaces
     the scene's ``[animation]`` table (same keys) and ``frames`` its frame count. Each frame is
     traced, composited with the scene's ``[composite]`` options updated by ``composite``, and
-    written atomically; ``progress(done, frames)`` is called after each frame. Ctrl-C stops
-    between or inside frames: finished frames stay, the video is not written.
+    written atomically; the MP4 is encoded as frames arrive, the GIF (palette frames, at most
+    :data:`GIF_MEMORY_LIMIT` bytes) at the end. ``progress(done, total)`` counts retina cells
+    over all frames. Ctrl-C stops within a fraction of a second: finished frames stay, the
+    video is not written.
     """
     output = os.fspath(output)
     kind = _video_kind(output, video)
@@ -161,23 +179,33 @@ def animate(
     animated = _table(scene, animation, frames)
     data = animated.to_dict()
     table = data["animation"]
-    options = dict(data.get("composite") or {})
-    options.setdefault("background", data["background"])
+    options = scene_options(data)
     options.update(composite or {})
     count = int(table["frames"])
+    cells = int(np.prod(animated.retina_shape))
+    if kind == "gif":
+        width, height = options.get("size") or (512, 512)
+        if count * int(width) * int(height) > GIF_MEMORY_LIMIT:
+            raise ValueError(
+                f"a GIF of {count} frames of {width}×{height} would hold "
+                f"{count * int(width) * int(height) / 2**30:.1f} GiB: write an MP4 "
+                "(video='mp4') or PNG frames only (video=None), or use fewer frames")
     paths = frame_paths(output, count)
-    video_frames: list[np.ndarray] = []
-    for k, path in enumerate(paths):
-        still = frame_scene(animated, k)
-        picture = _composite(trace(still, threads=threads), threads=threads, **options)
-        write_png(path, picture)
-        if kind is not None:
-            video_frames.append(to_srgb8(picture, opaque=True))
-        if progress is not None:
-            progress(k + 1, count)
-    written = list(paths)
-    if kind is not None:
-        video_path = os.path.splitext(output)[0] + "." + kind
-        (_write_gif if kind == "gif" else _write_mp4)(video_path, video_frames, float(table["fps"]))
-        written.append(video_path)
-    return written
+    movie = _Video(kind, os.path.splitext(output)[0] + "." + kind, float(table["fps"])) if kind else None
+    try:
+        for k, path in enumerate(paths):
+            tick = None if progress is None else (lambda done, _total, k=k: progress(k * cells + done, count * cells))
+            still = frame_scene(animated, k)
+            picture = _composite(trace(still, threads=threads, progress=tick), threads=threads, **options)
+            write_png(path, picture)
+            if movie is not None:
+                movie.add(to_srgb8(picture, opaque=True))
+            if progress is not None:
+                progress((k + 1) * cells, count * cells)
+        if movie is not None:
+            movie.finish()
+    except BaseException:
+        if movie is not None:
+            movie.abort()
+        raise
+    return paths + ([movie.path] if movie is not None else [])

@@ -184,7 +184,7 @@ def run(argv: list[str] | None = None) -> int:
     scene = load_dict(data, base=scene._base or os.path.dirname(os.path.abspath(args.scene)))
 
     # 2. Trace, then composite, with a progress bar.
-    from .composite import composite
+    from .composite import composite, scene_options
 
     bar = Progress(args.quiet)
     if animating:
@@ -207,10 +207,7 @@ def run(argv: list[str] | None = None) -> int:
     retina = trace(scene, threads=args.threads, progress=bar.update)
     bar.end()
     bar.begin("compositing")
-    final = scene.to_dict()
-    options = dict(final.get("composite") or {})
-    options.setdefault("background", final["background"])
-    picture = composite(retina, **options)
+    picture = composite(retina, **scene_options(scene.to_dict()))
     bar.update(1, 1)
     bar.end()
 

@@ -11,7 +11,7 @@ import numpy as np
 from . import _ndtrace
 from .retina import Retina
 
-__all__ = ["composite", "MODES", "PROJECTIONS"]
+__all__ = ["composite", "scene_options", "MODES", "PROJECTIONS"]
 
 MODES = ("volume", "mip", "first_hit", "slices")
 PROJECTIONS = ("perspective", "orthographic")
@@ -199,3 +199,11 @@ def composite(
         strip_height=strip_height, labels=bool(labels), threads=threads,
     )
     return out
+
+
+def scene_options(description: dict) -> dict:
+    """The :func:`composite` keyword arguments a scene asks for: its ``[composite]`` table, with
+    the scene's ``background`` unless the table sets one. ``description`` is ``Scene.to_dict()``."""
+    options = dict(description.get("composite") or {})
+    options.setdefault("background", description["background"])
+    return options

@@ -72,11 +72,25 @@ pub(crate) fn check<const N: usize>(a: &AnimationDesc, objects: usize) -> R<()> 
             ))
         }
         AnimationTarget::Objects(ids) => {
-            if let Some((k, i)) = ids.iter().enumerate().find(|(_, &i)| i >= objects) {
+            if ids.is_empty() {
                 return Err(PathError::new(
-                    format!("animation.target[{k}]"),
-                    format!("object {i} does not exist (the scene has {objects} objects)"),
+                    "animation.target",
+                    "lists no objects: give at least one index, \"objects\" or \"camera\"",
                 ));
+            }
+            for (k, &i) in ids.iter().enumerate() {
+                if i >= objects {
+                    return Err(PathError::new(
+                        format!("animation.target[{k}]"),
+                        format!("object {i} does not exist (the scene has {objects} objects)"),
+                    ));
+                }
+                if let Some(first) = ids[..k].iter().position(|&j| j == i) {
+                    return Err(PathError::new(
+                        format!("animation.target[{k}]"),
+                        format!("object {i} is already listed at animation.target[{first}]"),
+                    ));
+                }
             }
         }
     }
@@ -511,6 +525,8 @@ sweep = { plane = [0, 3], degrees = [0, 90] }
             ("plane = [0, 3]", "plane = [0, 4]", "animation.sweep.plane: expected two different axes in 0..3"),
             ("frames = 5", "frames = 5\ntarget = \"lights\"", "animation.target: expected \"objects\", \"camera\""),
             ("frames = 5", "frames = 5\ntarget = [0, 2]", "animation.target[1]: object 2 does not exist"),
+            ("frames = 5", "frames = 5\ntarget = [1, 0, 1]", "animation.target[2]: object 1 is already listed at animation.target[0]"),
+            ("frames = 5", "frames = 5\ntarget = []", "animation.target: lists no objects"),
             ("frames = 5", "frames = 5\ncenter = [0, 0]", "animation.center: expected 4 numbers (dim = 4), got 2"),
             ("frames = 5", "frames = 5\nrolling = { path = [[0, 0, 0], [1, 0, 0]], radius = 1 }", "animation: give exactly one motion"),
             ("sweep = { plane = [0, 3], degrees = [0, 90] }", "", "animation: give exactly one motion"),

@@ -50,6 +50,10 @@ pub fn friendly_message(message: &str, path: &str) -> String {
             }
             out
         }
+        // pythonize's message for a negative or too large Python int in an unsigned field.
+        _ if message.contains("out of range integral type conversion") => {
+            "integer out of range: expected a non-negative integer of sensible size".to_string()
+        }
         _ => message.to_string(),
     }
 }
