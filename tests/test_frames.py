@@ -17,6 +17,7 @@ import pytest
 
 import ndtrace
 from ndtrace import frames as fr
+from ndtrace import rotation as rot
 from ndtrace.rotation import quat_multiply, quat_to_matrix
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -139,6 +140,30 @@ def test_minimal_rotation_takes_a_to_b_and_fixes_the_rest():
         fr.minimal_rotation([1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0])
 
 
+def test_minimal_rotation_is_rotation_between_and_checks_its_input():
+    rng = np.random.default_rng(4)
+    a, b = (v / np.linalg.norm(v, axis=1, keepdims=True) for v in rng.normal(size=(2, 7, 4)))
+    v = rng.normal(size=(7, 4))
+    want = np.einsum("nij,nj->ni", rot.rotation_between(a, b), v)
+    np.testing.assert_allclose(fr.minimal_rotation(a, b, v), want, atol=1e-15)
+    # Several vectors (K, N) moved by one rotation, and one a against many b.
+    np.testing.assert_allclose(fr.minimal_rotation(a[0], b[0], v), v @ rot.rotation_between(a[0], b[0]).T,
+                               atol=1e-15)
+    np.testing.assert_allclose(fr.minimal_rotation(a[0], b, v)[3], rot.rotation_between(a[0], b[3]) @ v[3],
+                               atol=1e-15)
+    for call, match in [
+        (lambda: fr.minimal_rotation(2 * a[0], b[0], v[0]), r"^a: not a unit vector"),
+        (lambda: fr.minimal_rotation(a[0], b[0] + 1e-6, v[0]), r"^b: not a unit vector"),
+        (lambda: fr.minimal_rotation(a[0], b[0], [np.nan, 0, 0, 0]), r"^v: non-finite"),
+        (lambda: fr.minimal_rotation(a[0], b[0], "xyzw"), r"^v: expected real numbers"),
+        (lambda: fr.minimal_rotation(a[0], b[0], v[0, :3]), r"^a, b, v: expected vectors of the same length"),
+        (lambda: fr.minimal_rotation(a[:3], b[:3], v[:2]), r"^a, b, v: batch axes do not broadcast"),
+        (lambda: fr.minimal_rotation(a[:2], np.stack([b[0], -a[1]]), v[:2]), r"^a, b: antiparallel at index \(1,\)"),
+    ]:
+        with pytest.raises(ValueError, match=match):
+            call()
+
+
 def test_parallel_transport_has_zero_twist():
     points, _, s = helix()
     T, N, B = fr.parallel_transport(points)
@@ -203,6 +228,40 @@ def test_tait_matrix_reproduces_the_frame_equations():
     dR = (quat_to_matrix(q + 1e-5 * printed @ q / 2) - quat_to_matrix(q - 1e-5 * printed @ q / 2)) / 2e-5
     T, N, B = quat_to_matrix(q).T
     assert np.abs(dR[:, 0] - (k1 * N + k2 * B)).max() > 0.1
+
+
+def test_tait_normalizes_q0_and_checks_coefficient_callables():
+    s = np.linspace(0.0, 1.0, 11)
+    q0 = np.array([1 + 5e-10, 0.0, 0.0, 0.0])  # within UNIT_TOLERANCE, not exactly unit
+    q = fr.tait(q0, 0.0, 0.0, 0.0, s)
+    assert np.array_equal(q[0], [1.0, 0.0, 0.0, 0.0])
+    np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-15)
+    with pytest.raises(ValueError, match=r"^q0: not a unit quaternion"):
+        fr.tait([1 + 1e-6, 0, 0, 0], 0.0, 0.0, 0.0, s)
+    with pytest.raises(ValueError, match=r"^k1: the callable returned nan at s = 0\.5"):
+        fr.tait([1, 0, 0, 0], lambda x: np.nan if x >= 0.5 else 1.0, 0.0, 0.0, s)
+    with pytest.raises(ValueError, match=r"^k2: the callable returned .* expected one real number"):
+        fr.tait([1, 0, 0, 0], 0.0, lambda x: np.array([x, x]), 0.0, s)
+    with pytest.raises(ValueError, match=r"^sigma: the callable returned 'x'"):
+        fr.tait([1, 0, 0, 0], 0.0, 0.0, lambda x: "x", s)
+    with pytest.raises(ValueError, match=r"^sigma: the callable returned inf"):
+        fr.tait([1, 0, 0, 0], 0.0, 0.0, lambda x: np.inf, s)
+    with pytest.raises(ValueError, match=r"^k1: expected a callable, a number or 11 finite values"):
+        fr.tait([1, 0, 0, 0], "fast", 0.0, 0.0, s)
+    with pytest.raises(ValueError, match=r"^s: non-finite"):
+        fr.tait([1, 0, 0, 0], 0.0, 0.0, 0.0, [0.0, np.nan, 1.0])
+
+
+def test_tait_matrix_rejects_bad_coefficients():
+    np.testing.assert_array_equal(fr.tait_matrix([1.0, 2.0], 0.0, 0.0)[:, 3, 0], [1.0, 2.0])
+    with pytest.raises(ValueError, match=r"^k1: non-finite value nan"):
+        fr.tait_matrix(np.nan, 0, 0)
+    with pytest.raises(ValueError, match=r"^sigma: non-finite value inf"):
+        fr.tait_matrix(0, 0, np.inf)
+    with pytest.raises(ValueError, match=r"^k2: expected real numbers"):
+        fr.tait_matrix(0, "a", 0)
+    with pytest.raises(ValueError, match=r"batch axes do not broadcast"):
+        fr.tait_matrix([1.0, 2.0], [1.0, 2.0, 3.0], 0)
 
 
 def test_tait_with_frenet_curvatures_reproduces_the_helix_frenet_frame():
@@ -426,6 +485,23 @@ def test_tube_4d_closes_without_a_seam():
     assert np.abs(moved @ basis.T - np.eye(3)).max() > 0.1
 
 
+def test_tube_4d_starts_from_the_completed_frame_and_checks_the_radius():
+    curve = quaternion_curve(60)[:20]
+    V, _ = fr.tube_4d(curve, 0.03)
+    T = fr.tangents(curve)
+    first = rot.frame(T[:1])  # columns T_0, F_0,1, F_0,2, F_0,3 with det +1
+    dirs, _ = fr.icosphere(0)
+    np.testing.assert_allclose(V[:12], curve[0] + 0.03 * dirs @ first[:, 1:].T, atol=1e-15)
+    extent = np.linalg.norm(np.ptp(curve, axis=0))
+    for radius in (1e200, 2 * extent):
+        with pytest.raises(ValueError, match=r"^radius: expected a radius below the curve's extent"):
+            fr.tube_4d(curve, radius)
+    with pytest.raises(ValueError, match=r"^radius: .*degenerate"):
+        fr.tube_4d(curve, 1e-300)
+    with pytest.raises(ValueError, match=r"^radius: expected a finite number > 0"):
+        fr.tube_4d(curve, "thin")
+
+
 def test_icosphere_is_a_closed_outward_sphere():
     for level in (0, 1):
         V, F = fr.icosphere(level)
@@ -452,13 +528,21 @@ GOOD = KNOT[::10]
     (lambda: fr.parallel_transport([[0, 0, 0], [1, 0, 0], [2, 0, 0], [1, 0, 0], [0, 0, 1]]), "sample 2 .*doubles back"),
     (lambda: fr.parallel_transport(GOOD, normal=[1, 2]), "normal"),
     (lambda: fr.geodesic_reference(GOOD, reference=[0, 0, 0]), "reference"),
+    (lambda: fr.geodesic_reference(GOOD, reference="z"), r"^reference: expected real numbers"),
+    (lambda: fr.geodesic_reference(GOOD, reference=[0, 0, np.nan]), r"^reference: non-finite"),
+    (lambda: fr.parallel_transport(GOOD, normal="up"), r"^normal: expected real numbers"),
+    (lambda: fr.frenet("points"), r"^points: expected a real"),
+    (lambda: fr.frame_quaternions(*fr.frenet(GOOD, closed=True)[:2], "B"), r"^B: expected real numbers"),
+    (lambda: fr.quaternion_length([[1, 0, 0, 0], [1 + 1e-6, 0, 0, 0]]), r"^q: not a unit quaternion .* at batch index 1"),
+    (lambda: fr.frame_curvatures(*fr.frenet(GOOD, closed=True), np.r_[np.arange(len(GOOD)), np.nan], closed=True),
+     r"^s: non-finite"),
     (lambda: fr.frame_quaternions(*fr.frenet(GOOD, closed=True)[:2], -fr.frenet(GOOD, closed=True)[2]),
      "right-handed"),
     (lambda: fr.frame_quaternions(np.ones((4, 3)), np.ones((4, 3)), np.ones((5, 3))), "shapes differ|orthonormal"),
     (lambda: fr.tait([1, 0, 0, 0], 1.0, 0.0, 0.0, [0, 1, 1]), "increasing"),
     (lambda: fr.tait([2, 0, 0, 0], 1.0, 0.0, 0.0, [0, 1, 2]), "unit quaternion"),
     (lambda: fr.tait([1, 0, 0, 0], [1.0, 2.0], 0.0, 0.0, [0, 1, 2]), "k1"),
-    (lambda: fr.quaternion_length(np.ones((4, 4))), "unit quaternions"),
+    (lambda: fr.quaternion_length(np.ones((4, 4))), "not a unit quaternion"),
     (lambda: fr.torus_knot(3, 5, 100, R=1.0, r=1.5), "smaller than R"),
     (lambda: fr.torus_knot(3, 0, 100), "q"),
     (lambda: fr.tube_3d(GOOD, *fr.frenet(GOOD, closed=True), radius=0.0), "radius"),

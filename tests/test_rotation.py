@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import re
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -134,6 +135,55 @@ def test_frames_are_right_handed_gram_schmidt(n):
         rot.frame([full[:, 0], 2 * full[:, 0]])
     with pytest.raises(ValueError, match="K ≤ N"):
         rot.frame(np.ones((n + 1, n)))
+
+
+@pytest.mark.parametrize("n", DIMS)
+def test_frame_fills_missing_axes_lowest_index_first(n):
+    eye = np.eye(n)
+    assert np.array_equal(rot.frame(np.zeros((0, n))), eye)
+    assert np.array_equal(rot.frame(eye[:1]), eye)
+    assert np.array_equal(rot.frame(eye[:2]), eye)
+    # One vector: the second column is the coordinate axis least aligned with it.
+    a = unit(np.arange(1.0, n + 1) * (-1) ** np.arange(n))
+    f = rot.frame(a[None])
+    want = eye[0] - a[0] * a
+    np.testing.assert_allclose(f[:, 1], want / np.linalg.norm(want), atol=1e-14)
+    assert_rotations(f)
+
+
+@pytest.mark.parametrize("n", DIMS)
+def test_rotation_between_is_the_minimal_rotation(n):
+    rng = rng_for(12, n)
+    a, b = random_units(rng, (2, 5, n))
+    m = rot.rotation_between(a, b)
+    assert m.shape == (5, n, n)
+    assert_rotations(m)
+    np.testing.assert_allclose(np.einsum("bij,bj->bi", m, a), b, atol=1e-14)
+    # The closed form R v = v − (a + b)((a + b)·v)/(1 + a·b) + 2b(a·v), written out here.
+    v = rng.normal(size=(5, n))
+    s, c = a + b, np.sum(a * b, -1, keepdims=True)
+    formula = v - s * np.sum(s * v, -1, keepdims=True) / (1 + c) + 2 * b * np.sum(a * v, -1, keepdims=True)
+    np.testing.assert_allclose(np.einsum("bij,bj->bi", m, v), formula, atol=1e-13)
+    # Broadcasting a single a against a batch of b.
+    np.testing.assert_allclose(rot.rotation_between(a[0], b), rot.rotation_between(np.broadcast_to(a[0], b.shape), b))
+    # Antipodal: by π in the plane of a and its least aligned axis (frame([a])[:, 1]).
+    m = rot.rotation_between(a[0], -a[0])
+    assert_rotations(m)
+    e = rot.frame(a[:1])[:, 1]
+    np.testing.assert_allclose(m @ a[0], -a[0], atol=1e-14)
+    np.testing.assert_allclose(m @ e, -e, atol=1e-14)
+    with pytest.raises(ValueError, match=r"^b: not a unit vector .* at batch index 1$"):
+        rot.rotation_between(a[:2], np.stack([b[0], 2 * b[1]]))
+    with pytest.raises(ValueError, match=r"^b: expected shape \(\.\.\., %d\) to match a" % n):
+        rot.rotation_between(a[0], np.ones(n + 1))
+
+
+def test_tolerances_are_the_cores():
+    assert rot.UNIT_TOLERANCE == 1e-9 and rot.ORTHOGONALITY_TOLERANCE == 1e-9
+    assert rot.SCENE_UNIT_TOLERANCE == 1e-3
+    rot.quat_to_matrix([1 + 0.9 * rot.UNIT_TOLERANCE, 0, 0, 0])
+    with pytest.raises(ValueError, match="not a unit quaternion"):
+        rot.quat_to_matrix([1 + 2 * rot.UNIT_TOLERANCE, 0, 0, 0])
 
 
 @pytest.mark.parametrize("n", range(3, 9))
@@ -355,6 +405,17 @@ def test_matrix_to_quat_sequences_are_continuous():
     assert np.all(np.sum(q2[1:] * q2[:-1], -1) > 0.99)
 
 
+def test_matrix_to_quat_of_unrelated_rotations_needs_continuous_false():
+    """The default reads axis 0 as a sequence; unrelated rotations want q0 ≥ 0 each."""
+    m = random_rotations(3, 40, seed=21)
+    independent = rot.matrix_to_quat(m, continuous=False)
+    assert np.all(independent[:, 0] >= 0)
+    sequence = rot.matrix_to_quat(m)
+    assert np.any(sequence[:, 0] < 0)  # the documented default: signs follow the sequence
+    assert np.all(np.sum(sequence[1:] * sequence[:-1], -1) >= 0)
+    np.testing.assert_allclose(np.abs(sequence), np.abs(independent), atol=1e-15)
+
+
 def test_quat_multiply_and_conjugate():
     rng = rng_for(7, 4)
     a, b = rng.normal(size=(50, 4)), rng.normal(size=(50, 4))
@@ -493,7 +554,9 @@ def test_matrices_that_are_not_rotations_are_rejected():
     (lambda: rot.rolling_ball(np.ones(8)), r"^displacement: .*N = 9"),
     (lambda: rot.rolling_ball([1.0, 2.0], 0.0), r"^radius: must be a positive number, got 0"),
     (lambda: rot.rolling_ball([1.0, 2.0], 1.0, "arcs"), r'^angle: expected "course" or "arc"'),
-    (lambda: rot.plane(3, 0, 3, 0.1), r"^i, j: expected two different axes in 0\.\.2"),
+    (lambda: rot.plane(3, 0, 3, 0.1), r"^i, j: expected two different axes in 0\.\.2 \(dim = 3\), got \[0, 3\]$"),
+    (lambda: rot.plane(3, 1, 1, 0.1), r"^i, j: expected two different axes in 0\.\.2 \(dim = 3\), got \[1, 1\]$"),
+    (lambda: rot.plane(3, -1, 1, 0.1), r"^i: expected an axis number ≥ 0"),
     (lambda: rot.plane(9, 0, 1, 0.1), r"^n: N must be in 2\.\.8"),
     (lambda: rot.slerp([1, 0, 0], [1, 0], 0.5), r"^b: expected shape \(\.\.\., 3\)"),
     (lambda: rot.from_nested_spheres([[0, 0, 1.0]]), r"^vectors: expected 2 vectors"),
@@ -594,25 +657,89 @@ def test_rotate_transform_round_trips_and_reports_paths():
                                    "not a unit quaternion (|p| = ")
 
 
-def test_documented_rotate_examples_load():
-    """The TOML examples of docs/scene-format.md's rotate forms build, and equal their matrices."""
-    text = DOCS.read_text()
-    examples = re.findall(r"^transform = (\[\{ rotate = .*?\} \}\])", text, flags=re.M | re.S)
-    assert len(examples) >= 5 and any("quaternions" in e for e in examples), examples
-    for ex in examples:
-        dim = 4
-        toml_text = f"""dim = {dim}
+DOCS_SCENE = """dim = 4
 [camera]
-position = [0, 0, 0, 5]
+position = [0.3, 0, 0, 5]
 look_at = [0, 0, 0, 0]
 up = [[0, 1, 0, 0], [0, 0, 1, 0]]
 fov = 40
-resolution = 2
+resolution = 7
+[[lights]]
+type = "directional"
+direction = [1, 1, 1, 1]
 [[objects]]
-shape = "simplex"
-transform = {ex}
+shape = "hypercube"
+transform = [{{ scale = 0.6 }}, {steps}, {{ translate = [0.1, 0, 0, 0] }}]
 """
-        ndtrace.load_toml(toml_text, name="docs")
+
+
+def docs_render(steps_toml: str):
+    """Renders a hypercube whose transform is a scale, the TOML list ``steps_toml``, and a
+    translation, loaded from TOML text like a scene file."""
+    text = DOCS_SCENE.format(steps=steps_toml.strip()[1:-1])
+    r = ndtrace.trace(ndtrace.load_toml(text, name="docs"))
+    assert 0 < r.hit.sum() < r.hit.size
+    return r.rgba, r.depth, r.normal
+
+
+def matrix_toml(m: np.ndarray) -> str:
+    rows = ", ".join("[" + ", ".join(repr(float(x)) for x in row) + "]" for row in m)
+    return f"[{{ matrix = [{rows}] }}]"
+
+
+def test_documented_rotate_examples_equal_their_matrices():
+    """Each TOML example of docs/scene-format.md's rotate forms builds the same scene as an
+    explicit ``matrix`` step computed with ndtrace.rotation (and not the identity)."""
+    text = DOCS.read_text()
+    examples = re.findall(r"^transform = (\[\{ rotate = .*?\} \}\])", text, flags=re.M | re.S)
+    assert len(examples) >= 5 and any("quaternions" in e for e in examples), examples
+    plain = docs_render("[{ scale = 1.0 }]")
+    for ex in examples:
+        (step,) = tomllib.loads(f"transform = {ex}")["transform"]
+        r = step["rotate"]
+        if "plane" in r:
+            m = rot.plane(4, *r["plane"], math.radians(r["degrees"]))
+        elif "quaternions" in r:
+            q, p = np.array(r["quaternions"], dtype=float)
+            m = rot.so4_from_quaternions(q / np.linalg.norm(q), p / np.linalg.norm(p))
+        else:
+            m = rot.rolling_ball(r["rolling"], r["radius"], r.get("angle", "course"))
+        by_docs = docs_render(ex)
+        assert_same_render(by_docs, docs_render(matrix_toml(m)))
+        assert np.abs(plain[0] - by_docs[0]).max() > 1e-2, ex  # the rotation shows
     c, s = math.cos(math.radians(15)), math.sin(math.radians(15))
     np.testing.assert_allclose(rot.so4_from_quaternions([c, 0, 0, s], [c, 0, 0, s]),
                                rot.plane(4, 1, 2, math.radians(30)), atol=1e-15)
+
+
+def test_hand_typed_quaternions_load_normalized():
+    """Scene quaternions typed to four digits (|q| ≠ 1 by ~1e-5) are accepted and normalized;
+    the scene equals the one with the exact quaternions to ~1e-4. |q| = 1.01 is rejected."""
+    c, s = math.cos(math.radians(15)), math.sin(math.radians(15))
+    exact = [[c, 0, 0, s], [0.6, 0, 0.8, 0]]
+    typed = [[0.9659, 0, 0, 0.2588], [0.6, 0, 0.8, 0]]
+    assert abs(np.linalg.norm(typed[0]) - 1) > 10 * rot.UNIT_TOLERANCE  # strict check would refuse
+    with pytest.raises(ValueError, match="not a unit quaternion"):
+        rot.so4_from_quaternions(*typed)
+    by_typed = render(scene_dict(4, {"rotate": {"quaternions": typed}}))
+    by_exact = render(scene_dict(4, {"rotate": {"quaternions": exact}}))
+    for x, y in zip(by_typed, by_exact):
+        np.testing.assert_allclose(x, y, atol=1e-4)
+    by_toml = docs_render("[{ rotate = { quaternions = [[0.9659, 0, 0, 0.2588], [0.6, 0, 0.8, 0]] } }]")
+    exact_m = rot.so4_from_quaternions(*exact)
+    for x, y in zip(by_toml, docs_render(matrix_toml(exact_m))):
+        np.testing.assert_allclose(x, y, atol=1e-4)
+    # The tolerance is 1e-3: |q| = 1.01 is a typo, reported at its path.
+    with pytest.raises(ValueError) as e:
+        ndtrace.load_dict(scene_dict(4, {"rotate": {"quaternions": [[1.01, 0, 0, 0], [1, 0, 0, 0]]}}))
+    assert str(e.value) == ("<dict>: objects[0].transform[1].rotate.quaternions[0]: "
+                            "not a unit quaternion (|q| = 1.01)")
+    with pytest.raises(ValueError, match=r"rotate\.quaternions\[1\]: not a unit quaternion \(\|p\| = 0\.998"):
+        ndtrace.load_dict(scene_dict(4, {"rotate": {"quaternions": [[1, 0, 0, 0], [0.998, 0, 0, 0]]}}))
+
+
+def test_rotate_plane_errors_name_the_path():
+    with pytest.raises(ValueError) as e:
+        ndtrace.load_dict(scene_dict(4, {"rotate": {"plane": [2, 2], "degrees": 10}}))
+    assert str(e.value) == ("<dict>: objects[0].transform[1].rotate.plane: "
+                            "expected two different axes in 0..3 (dim = 4), got [2, 2]")

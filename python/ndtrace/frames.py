@@ -22,7 +22,9 @@ Conventions
   (second-order one-sided differences at the ends of an open curve); only directions are used,
   so the parameter speed does not matter for ``T``, ``N``, ``B``.
 * Arclength ``s`` is the cumulative chord length (:func:`arclength`).
-* Every function validates its input and raises ValueError naming the problem.
+* Every function validates its input and raises ValueError naming the argument. Unit
+  quaternions and orthonormal frames are checked with the tolerances of ``ndtrace.rotation``
+  (``UNIT_TOLERANCE``, ``ORTHOGONALITY_TOLERANCE``, 1e-9: they are computed values).
 
 Example (the (3, 5) torus knot with its closed minimal-length quaternion frame, as a tube)::
 
@@ -39,8 +41,12 @@ from typing import Callable, Literal
 
 import numpy as np
 
-from . import geometry
-from .rotation import matrix_to_quat, quat_conjugate, quat_multiply, quat_to_matrix, slerp
+from . import _ndtrace, geometry
+from .geometry import _array
+from .rotation import (frame, matrix_to_quat, quat_conjugate, quat_multiply, quat_to_matrix,
+                       rotation_between, slerp)
+
+_k = _ndtrace.rotation
 
 __all__ = [
     "tangents", "arclength", "minimal_rotation",
@@ -82,35 +88,32 @@ def _curve(name: str, points, dims: tuple[int, ...] | None = (3,), closed: bool 
 
 
 def _frame(T, N, B) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Checks T, N, B are (n, 3), orthonormal and right-handed (to 1e-6)."""
+    """Checks T, N, B are finite (n, 3) and that every [T_i N_i B_i] (columns) is a rotation —
+    orthonormal and right-handed, B = T × N — with the check of ``ndtrace.rotation``."""
     arrays = []
     for name, a in (("T", T), ("N", N), ("B", B)):
-        a = np.asarray(a, dtype=np.float64)
+        a = _array(name, a, 2, "(n, 3)")
         if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] < 2:
-            raise ValueError(f"{name}: expected shape (n, 3), got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"{name}: not finite")
+            raise ValueError(f"{name}: expected shape (n, 3) with n ≥ 2, got {a.shape}")
         arrays.append(a)
     T, N, B = arrays
     if not T.shape == N.shape == B.shape:
         raise ValueError(f"T, N, B: shapes differ: {T.shape}, {N.shape}, {B.shape}")
-    R = np.stack([T, N, B], axis=-1)
-    err = np.abs(np.einsum("nji,njk->nik", R, R) - np.eye(3)).max(axis=(1, 2))
-    err = np.maximum(err, np.abs(np.linalg.det(R) - 1.0))
-    if np.any(err > 1e-6):
-        i = int(np.argmax(err > 1e-6))
-        raise ValueError(f"T, N, B: frame {i} is not orthonormal and right-handed (B = T × N); "
-                         f"error {err[i]:.2e}")
+    R = np.ascontiguousarray(np.stack([T, N, B], axis=-1))
+    try:
+        _k.check_rotations("T, N, B", 3, R.reshape(-1))
+    except ValueError as e:
+        raise ValueError(f"{e} (each frame [T N B] must be orthonormal and right-handed, "
+                         f"B = T × N)") from None
     return T, N, B
 
 
 def _quaternions(name: str, q) -> np.ndarray:
-    """A finite float64 (n, 4) array of unit quaternions, n ≥ 2."""
-    q = np.asarray(q, dtype=np.float64)
+    """A finite float64 (n, 4) array of unit quaternions (``rotation.UNIT_TOLERANCE``), n ≥ 2."""
+    q = _array(name, q, 2, "(n, 4)")
     if q.ndim != 2 or q.shape[1] != 4 or q.shape[0] < 2:
         raise ValueError(f"{name}: expected shape (n, 4) with n ≥ 2, got {q.shape}")
-    if not np.all(np.isfinite(q)) or np.any(np.abs(np.linalg.norm(q, axis=1) - 1) > 1e-6):
-        raise ValueError(f"{name}: expected finite unit quaternions")
+    _k.check_units(name, np.ascontiguousarray(q).reshape(-1), 4, "quaternion")
     return q
 
 
@@ -168,26 +171,31 @@ def arclength(points, closed: bool = False) -> np.ndarray:
 
 def minimal_rotation(a, b, v) -> np.ndarray:
     """Applies the minimal rotation taking unit vector ``a`` to unit vector ``b`` (the rotation in
-    the plane of a and b, fixing its orthogonal complement; any dimension) to ``v``::
+    the plane of a and b, fixing its orthogonal complement; any dimension N in 2..8) to ``v``:
+    ``rotation.rotation_between(a, b) @ v``, i.e.::
 
         R v = v − (a + b)·((a + b)·v)/(1 + a·b) + 2 b (a·v)
 
-    Arrays broadcast over leading axes. This is the discrete parallel-transport step
-    ("rotate the previous frame by the rotation taking T_i to T_{i+1}") and, with a fixed ``a``,
-    the course's geodesic reference ``R(ẑ·T̂, ẑ × T̂)``. Antiparallel a, b: ValueError."""
-    a, b, v = (np.asarray(x, dtype=np.float64) for x in (a, b, v))
-    c = np.sum(a * b, axis=-1, keepdims=True)
-    if np.any(1.0 + c <= ANTIPARALLEL_TOL):
-        raise ValueError("minimal_rotation: a and b are antiparallel; the minimal rotation is undefined")
-    s = a + b
-    return v - s * np.sum(s * v, axis=-1, keepdims=True) / (1.0 + c) + 2.0 * b * np.sum(a * v, axis=-1, keepdims=True)
-
-
-def _least_aligned(t: np.ndarray) -> np.ndarray:
-    """A unit vector orthogonal to unit t: the coordinate axis least aligned with t, orthogonalized."""
-    e = np.zeros_like(t)
-    e[int(np.argmin(np.abs(t)))] = 1.0
-    return _unit(e - np.dot(e, t) * t)
+    ``a``, ``b``, ``v`` are (..., N) with the same N; their leading axes broadcast. This is the
+    discrete parallel-transport step ("rotate the previous frame by the rotation taking T_i to
+    T_{i+1}") and, with a fixed ``a``, the course's geodesic reference ``R(ẑ·T̂, ẑ × T̂)``.
+    Antiparallel a, b (``1 + a·b ≤ ANTIPARALLEL_TOL``), where the minimal rotation is not
+    unique: ValueError."""
+    a, b = _array("a", a, 1, "(..., N)"), _array("b", b, 1, "(..., N)")
+    v = _array("v", v, 1, "(..., N)")
+    if not a.shape[-1] == b.shape[-1] == v.shape[-1]:
+        raise ValueError(f"a, b, v: expected vectors of the same length N, got shapes "
+                         f"{a.shape}, {b.shape}, {v.shape}")
+    R = rotation_between(a, b)  # checks that a and b are unit vectors, names them
+    bad = 1.0 + np.sum(a * b, axis=-1) <= ANTIPARALLEL_TOL
+    if np.any(bad):
+        where = "" if bad.ndim == 0 else f" at index {tuple(int(i) for i in np.argwhere(bad)[0])}"
+        raise ValueError(f"a, b: antiparallel{where}; the minimal rotation is undefined")
+    try:
+        return np.matmul(R, v[..., None])[..., 0]
+    except ValueError:
+        raise ValueError(f"a, b, v: batch axes do not broadcast: a {a.shape}, b {b.shape}, "
+                         f"v {v.shape}") from None
 
 
 def _transport(T: np.ndarray, F0: np.ndarray) -> np.ndarray:
@@ -195,13 +203,16 @@ def _transport(T: np.ndarray, F0: np.ndarray) -> np.ndarray:
     (n, N): F_{i+1} = minimal_rotation(T_i, T_{i+1}, F_i), re-orthonormalized against T_{i+1}
     (Gram–Schmidt) so that round-off does not accumulate. Returns (n, K, N)."""
     n = len(T)
+    nearly_opposite = 1.0 + np.sum(T[:-1] * T[1:], axis=1) <= ANTIPARALLEL_TOL
+    if np.any(nearly_opposite):
+        i = int(np.argmax(nearly_opposite))
+        raise ValueError(f"points: tangents {i} and {i + 1} are antiparallel; "
+                         f"parallel transport is undefined there")
+    steps = rotation_between(T[:-1], T[1:])  # (n − 1, N, N), all at once
     F = np.empty((n,) + F0.shape)
     F[0] = F0
     for i in range(n - 1):
-        if 1.0 + np.dot(T[i], T[i + 1]) <= ANTIPARALLEL_TOL:
-            raise ValueError(f"points: tangents {i} and {i + 1} are antiparallel; "
-                             f"parallel transport is undefined there")
-        f = minimal_rotation(T[i], T[i + 1], F[i])
+        f = F[i] @ steps[i].T  # rows F_i,k rotated
         for k in range(len(f)):  # Gram–Schmidt against T_{i+1} and the vectors before
             f[k] -= np.dot(f[k], T[i + 1]) * T[i + 1] + f[:k].T @ (f[:k] @ f[k])
             f[k] /= np.linalg.norm(f[k])
@@ -241,11 +252,11 @@ def parallel_transport(points, closed: bool = False, normal=None):
     p = _curve("points", points, (3,), closed)
     T = tangents(p, closed)
     if normal is None:
-        n0 = _least_aligned(T[0])
+        n0 = frame(T[:1])[:, 1]  # the coordinate axis least aligned with T_0, orthogonalized
     else:
-        v = np.asarray(normal, dtype=np.float64)
-        if v.shape != (3,) or not np.all(np.isfinite(v)):
-            raise ValueError(f"normal: expected 3 finite numbers, got {np.shape(normal)}")
+        v = _array("normal", normal, 1, "(3,)")
+        if v.shape != (3,):
+            raise ValueError(f"normal: expected 3 finite numbers, got shape {v.shape}")
         w = v - np.dot(v, T[0]) * T[0]
         if np.linalg.norm(w) <= 1e-8 * np.linalg.norm(v):
             raise ValueError("normal: must not be parallel to (or zero) the first tangent")
@@ -263,17 +274,14 @@ def geodesic_reference(points, reference=None, closed: bool = False):
     naming the sample: choose another reference)."""
     p = _curve("points", points, (3,), closed)
     T = tangents(p, closed)
-    if reference is None:
-        z = np.array([0.0, 0.0, 1.0])
-    else:
-        z = np.asarray(reference, dtype=np.float64)
-        if z.shape != (3,) or not np.all(np.isfinite(z)) or np.linalg.norm(z) == 0:
-            raise ValueError(f"reference: expected a finite non-zero 3-vector, got {reference!r}")
-        z = _unit(z)
-    e = np.array([1.0, 0.0, 0.0]) if reference is None else _least_aligned(z)
+    z = np.array([0.0, 0.0, 1.0]) if reference is None else _array("reference", reference, 1, "(3,)")
+    if z.shape != (3,) or not np.linalg.norm(z) > 0:
+        raise ValueError(f"reference: expected a finite non-zero 3-vector, got {reference!r}")
+    z = z / np.linalg.norm(z)
+    e = frame(z[None])[:, 1]  # (ẑ, e, ẑ × e) = frame([ẑ]); e = x̂ for ẑ = (0, 0, 1)
     bad = 1.0 + T @ z <= ANTIPARALLEL_TOL
     if np.any(bad):
-        raise ValueError(f"geodesic_reference: the tangent at sample {int(np.argmax(bad))} is "
+        raise ValueError(f"reference: the tangent at sample {int(np.argmax(bad))} is "
                          f"opposite to the reference direction; choose another reference")
     N = minimal_rotation(z, T, e)
     return T, N, np.cross(T, N)
@@ -379,42 +387,77 @@ def tait_matrix(k1, k2, sigma) -> np.ndarray:
 
     i.e. A q = q ∗ (0, σ, −k2, k1): the body-frame angular velocity. With R(q) of eq. 9 and
     columns T, N, B it reproduces T' = k1 N + k2 B, N' = −k1 T + σ B, B' = −k2 T − σ N. (The
-    matrix printed in the notes uses another ordering of the frame and does not.)"""
-    k1, k2, sigma = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in (k1, k2, sigma)))
+    matrix printed in the notes uses another ordering of the frame and does not.)
+
+    k1, k2, σ are finite numbers or arrays whose shapes broadcast → (..., 4, 4)."""
+    args = [(name, _array(name, x, 0, "() or (...)")) for name, x in (("k1", k1), ("k2", k2), ("sigma", sigma))]
+    try:
+        k1, k2, sigma = np.broadcast_arrays(*(a for _, a in args))
+    except ValueError:
+        shapes = ", ".join(f"{name} {a.shape}" for name, a in args)
+        raise ValueError(f"k1, k2, sigma: batch axes do not broadcast: {shapes}") from None
+    return _tait_matrix(k1, k2, sigma)
+
+
+def _tait_matrix(k1, k2, sigma) -> np.ndarray:
+    """:func:`tait_matrix` of already validated, broadcast coefficients."""
     z = np.zeros_like(k1)
     rows = [[z, -sigma, k2, -k1], [sigma, z, k1, k2], [-k2, -k1, z, sigma], [k1, -k2, -sigma, z]]
     return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
 
 
-def _coefficient(name: str, value, s: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-    """k(s) from a callable, a number, or per-sample values (linearly interpolated)."""
+def _coefficient(name: str, value, s: np.ndarray) -> Callable[[float], float]:
+    """k(s) at one arclength, from a callable (whose every value is checked: one finite real
+    number), a number, or per-sample values (linearly interpolated)."""
     if callable(value):
-        return lambda x: np.broadcast_to(np.asarray(value(x), dtype=np.float64), np.shape(x))
-    v = np.asarray(value, dtype=np.float64)
+        def checked(x: float) -> float:
+            raw = value(x)
+            try:
+                v = np.asarray(raw, dtype=np.float64)
+            except (TypeError, ValueError):
+                v = None
+            if v is None or v.size != 1:
+                raise ValueError(f"{name}: the callable returned {raw!r} at s = {x}; expected one "
+                                 f"real number")
+            if not np.isfinite(v).all():
+                raise ValueError(f"{name}: the callable returned {float(v.reshape(()))} at s = {x}; "
+                                 f"expected a finite number")
+            return float(v.reshape(()))
+        return checked
+    try:
+        v = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected a callable, a number or {len(s)} finite values, "
+                         f"got {value!r}") from None
     if v.ndim == 0:
         v = np.full(len(s), float(v))
     if v.shape != s.shape or not np.all(np.isfinite(v)):
         raise ValueError(f"{name}: expected a callable, a number or {len(s)} finite values, got shape {v.shape}")
-    return lambda x: np.interp(x, s, v)
+    return lambda x: float(np.interp(x, s, v))
 
 
 def tait(q0, k1, k2, sigma, s) -> np.ndarray:
     """Integrates Tait's quaternion frame equation q' = ½ A(k1, k2, σ) q (:func:`tait_matrix`)
     from q(s_0) = q0 over the arclength samples s (n,) with classical RK4 (one step per
     interval), renormalizing q after each step. k1, k2, σ are per-sample arrays (n,) (linearly
-    interpolated between samples), numbers, or callables of s. Returns (n, 4).
+    interpolated between samples), numbers, or callables of s (called with one arclength, each
+    must return one finite number). Returns (n, 4). q0 must be a unit quaternion
+    (``rotation.UNIT_TOLERANCE``); it is normalized before integrating.
 
     σ = 0 gives parallel transport; k2 = 0, k1 = κ, σ = τ gives the Frenet frame."""
-    s = np.asarray(s, dtype=np.float64)
-    if s.ndim != 1 or len(s) < 2 or not np.all(np.isfinite(s)) or np.any(np.diff(s) <= 0):
+    s = _array("s", s, 1, "(n,)")
+    if s.ndim != 1 or len(s) < 2 or np.any(np.diff(s) <= 0):
         raise ValueError("s: expected at least 2 finite, strictly increasing arclengths")
-    q = np.asarray(q0, dtype=np.float64)
-    if q.shape != (4,) or not np.all(np.isfinite(q)) or abs(np.linalg.norm(q) - 1) > 1e-6:
-        raise ValueError(f"q0: expected a unit quaternion (4,), got {q0!r}")
+    q = _array("q0", q0, 1, "(4,)")
+    if q.shape != (4,):
+        raise ValueError(f"q0: expected a unit quaternion (4,), got shape {q.shape}")
+    _k.check_units("q0", np.ascontiguousarray(q), 4, "quaternion")
+    q = q / np.linalg.norm(q)
     coeffs = [_coefficient(name, v, s) for name, v in (("k1", k1), ("k2", k2), ("sigma", sigma))]
 
     def rate(x: float, q: np.ndarray) -> np.ndarray:
-        return 0.5 * tait_matrix(*(c(np.float64(x)) for c in coeffs)) @ q
+        k1_x, k2_x, sigma_x = (np.float64(c(float(x))) for c in coeffs)
+        return 0.5 * _tait_matrix(k1_x, k2_x, sigma_x) @ q
 
     out = np.empty((len(s), 4))
     out[0] = q
@@ -438,7 +481,7 @@ def frame_curvatures(T, N, B, s, closed: bool = False):
     the frame to second order in the sample spacing."""
     T, N, B = _frame(T, N, B)
     n = len(T)
-    s = np.asarray(s, dtype=np.float64)
+    s = _array("s", s, 1, f"({n + 1 if closed else n},)")
     if s.shape != (n + 1 if closed else n,) or np.any(np.diff(s) <= 0):
         raise ValueError(f"s: expected {n + 1 if closed else n} increasing arclengths, got shape {s.shape}")
     q = frame_quaternions(T, N, B)
@@ -556,10 +599,11 @@ def tube_4d(curve4, radius: float, subdivisions: int = 0, closed: bool = False):
     the curve's 3D normal space. Returns (vertices (V, 4), simplices (S, 4)): the tube's boundary,
     the 3-manifold S² × curve, as tetrahedra, oriented with outward normals (eq. 6).
 
-    1. Normal-space frames: three unit vectors ⊥ T_0 (completing T_0 to a positive basis) are
-       parallel-transported in 4D (the minimal rotation between consecutive tangents). On a closed
-       curve the transported frame comes back turned by a holonomy H ∈ SO(3); frame i is turned
-       by the fraction s_i/L of H⁻¹ (a quaternion slerp from the identity), so it closes.
+    1. Normal-space frames: the last three columns of ``rotation.frame([T_0])`` (T_0 completed
+       to a rotation, det +1) are parallel-transported in 4D (the minimal rotation between
+       consecutive tangents). On a closed curve the transported frame comes back turned by a
+       holonomy H ∈ SO(3); frame i is turned by the fraction s_i/L of H⁻¹ (a quaternion slerp
+       from the identity), so it closes.
     2. The cross-section is :func:`icosphere` (``subdivisions``); ring i has the vertices
        c_i + radius·Σ_k d_k F_i,k.
     3. Each S² triangle times a segment is a prism split into 3 tetrahedra by the vertex order
@@ -572,20 +616,22 @@ def tube_4d(curve4, radius: float, subdivisions: int = 0, closed: bool = False):
        ordered so its normal points outward (away from the curve; −T_0 / +T_{n−1} on the caps).
 
     Layout: tetrahedra 3·F·i … 3·F·(i + 1) − 1 (F = 20·4^subdivisions) are segment i; the caps
-    of an open tube come last. As in 3D, the tube is embedded only while ``radius`` is below the
-    curve's smallest radius of curvature (quaternion frame curves turn sharply where the space
-    curve's torsion peaks).
+    of an open tube come last. ``radius`` must be below the curve's extent (its bounding-box
+    diagonal) and large enough that the rings survive rounding (else a tetrahedron is
+    degenerate): ValueError naming ``radius``. As in 3D, the tube is embedded only while
+    ``radius`` is below the curve's smallest radius of curvature (quaternion frame curves turn
+    sharply where the space curve's torsion peaks).
     """
     c = _curve("curve4", curve4, (4,), closed)
     radius = _positive("radius", radius)
+    extent = float(np.linalg.norm(np.ptp(c, axis=0)))
+    if not radius < extent:
+        raise ValueError(f"radius: expected a radius below the curve's extent {extent:.6g} (its "
+                         f"bounding-box diagonal), got {radius!r}")
     n = len(c)
     T = tangents(c, closed)
-    # 1. Normal frames (n, 3, 4).
-    basis = np.linalg.qr(np.column_stack([T[0], np.eye(4)]))[0]
-    basis *= np.sign(basis[:, 0] @ T[0])
-    if np.linalg.det(basis) < 0:
-        basis[:, 3] = -basis[:, 3]
-    F = _transport(T, basis[:, 1:].T)
+    # 1. Normal frames (n, 3, 4): [T_0 F_0,1 F_0,2 F_0,3] = frame([T_0]), a rotation.
+    F = _transport(T, frame(T[:1])[:, 1:].T)
     if closed:
         back = minimal_rotation(T[-1], T[0], F[-1])  # frame n−1 transported across the seam
         H = F[0] @ back.T  # back_l = Σ_k H[k, l] F0_k
@@ -627,9 +673,16 @@ def tube_4d(curve4, radius: float, subdivisions: int = 0, closed: bool = False):
                                np.column_stack([faces[:, 0] + (n - 1) * K, np.full(len(faces), centres[1]),
                                                 faces[:, 1:] + (n - 1) * K])])
         tets = np.concatenate([tets, caps])
+    # 6. Degenerate tetrahedra: 3!·volume/radius³ from the edges in units of the radius (so
+    #    radius³ is never formed; radii so small that the rings are lost to rounding show here).
     pts = vertices[tets]
-    volume = np.linalg.norm(geometry.generalized_cross(pts[:, 1:] - pts[:, :1]), axis=1)
-    if np.any(volume <= 1e-12 * radius ** 3):
-        raise ValueError(f"tube_4d: tetrahedron {int(np.argmax(volume <= 1e-12 * radius ** 3))} is "
-                         f"degenerate (samples too close for the radius?)")
+    with np.errstate(over="ignore"):
+        edges = (pts[:, 1:] - pts[:, :1]) / radius
+    if not np.all(np.isfinite(edges)):
+        raise ValueError(f"radius: {radius!r} is too small for a curve of extent {extent:.6g}")
+    relative = np.linalg.norm(geometry.generalized_cross(edges), axis=1)
+    flat = ~(relative > 1e-12)
+    if np.any(flat):
+        raise ValueError(f"radius: tetrahedron {int(np.argmax(flat))} of the tube is degenerate "
+                         f"(samples too close together for radius {radius!r}?)")
     return vertices, tets.astype(np.int64)

@@ -5,6 +5,15 @@ Every function takes float64-convertible arrays, batched over leading axes where
 natural, and returns float64 arrays. Bad input (wrong shapes, NaN, non-unit quaternions,
 matrices that are not rotations) raises ValueError naming the argument.
 
+Tolerances (one policy, the constants of the Rust core, also used by ``ndtrace.frames``):
+arguments that must be unit vectors or unit quaternions are *computed* values and must have
+``| |q| − 1 | ≤ UNIT_TOLERANCE`` (1e-9); they are used as given. Rotation arguments must have
+``max |RᵀR − I| ≤ ORTHOGONALITY_TOLERANCE`` (1e-9) and det +1. Only quaternions typed by hand
+into a scene file (``{ rotate = { quaternions = [q, p] } }``) get the looser
+``SCENE_UNIT_TOLERANCE`` (1e-3, so four digits such as ``[0.7071, 0.7071, 0, 0]`` are enough)
+and are normalized before use. Normalize computed quaternions yourself (``q / |q|``) if they
+may have drifted.
+
 Conventions
 -----------
 * Matrices act on column vectors; **columns are the new axes** (``frame``).
@@ -22,8 +31,13 @@ Conventions
   ``plane(n, i, j, −A)`` to second order: the object turns *against* the loop (j toward i).
 * Quaternions are ``(q0, q1, q2, q3)`` with **q0 the scalar part** (scipy uses scalar-last
   ``(x, y, z, w)``). ``quat_to_matrix(q)`` is eq. 9, ``V ↦ q V q̄``; ``q = (cos θ/2, n̂ sin θ/2)``
-  turns by θ about n̂. ``matrix_to_quat`` returns q0 ≥ 0, or with ``continuous=True`` signs
-  that make consecutive quaternions (along axis 0) have non-negative dot products.
+  turns by θ about n̂. ``matrix_to_quat`` treats axis 0 of a batch as a **sequence by
+  default** (``continuous=True``): signs are chosen so that consecutive quaternions along axis
+  0 have non-negative dot products (the first has q0 ≥ 0), as animation and frame curves need.
+  For a batch of unrelated rotations pass ``continuous=False`` to get q0 ≥ 0 for every item.
+* ``rotation_between(a, b)`` is the minimal rotation taking unit a to unit b: in their plane,
+  fixing everything orthogonal to both; antipodal pairs turn by π in the plane of a and the
+  coordinate axis least aligned with a (the axis ``frame([a])`` puts second).
 * ``so4_from_quaternions(q, p)`` is ``v ↦ q v p̄`` on all quaternions v = (v0, v1, v2, v3);
   with p = q it is ``1 ⊕ quat_to_matrix(q)``. ``quaternions_from_so4`` inverts it up to the
   shared sign of (q, p) (the largest-magnitude component of q is made positive).
@@ -56,6 +70,7 @@ __all__ = [
     "compose",
     "rolling_ball",
     "frame",
+    "rotation_between",
     "look_at",
     "slerp",
     "to_nested_spheres",
@@ -73,6 +88,13 @@ __all__ = [
 
 _DIMS = f"{_ndtrace.MIN_DIM}..{_ndtrace.MAX_DIM}"
 
+#: | |q| − 1 | allowed for unit-vector and unit-quaternion arguments (computed values)
+UNIT_TOLERANCE: float = _k.UNIT_TOLERANCE
+#: | |q| − 1 | allowed for quaternions typed into scene files (normalized when accepted)
+SCENE_UNIT_TOLERANCE: float = _k.SCENE_UNIT_TOLERANCE
+#: max |RᵀR − I| allowed for rotation arguments
+ORTHOGONALITY_TOLERANCE: float = _k.ORTHOGONALITY_TOLERANCE
+
 
 def _c(a: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.float64)
@@ -83,6 +105,14 @@ def _int(name: str, value) -> int:
         return operator.index(value)
     except TypeError:
         raise ValueError(f"{name}: expected an integer, got {value!r}") from None
+
+
+def _axis(name: str, value) -> int:
+    """An axis number: an integer ≥ 0 (whether it fits the dimension is checked in Rust)."""
+    i = _int(name, value)
+    if i < 0:
+        raise ValueError(f"{name}: expected an axis number ≥ 0 (axes count from 0), got {i}")
+    return i
 
 
 def _n(name: str, n: int, shape: tuple | None = None) -> int:
@@ -116,9 +146,7 @@ def plane(n: int, i: int, j: int, theta) -> np.ndarray:
     """The course's plane rotation R_ij(θ) (eq. 6) in R^n: turns axis i toward axis j
     (``R e_i = cos θ e_i + sin θ e_j``), θ in radians, scalar or array (...) → (..., n, n)."""
     n = _n("n", _int("n", n))
-    i, j = _int("i", i), _int("j", j)
-    if not (0 <= i < n and 0 <= j < n and i != j):
-        raise ValueError(f"i, j: expected two different axes in 0..{n - 1}, got ({i}, {j})")
+    i, j = _axis("i", i), _axis("j", j)  # the plane itself is checked by the kernel
     th = _array("theta", theta, 0, "() or (...)")
     return _k.plane(n, i, j, _c(th).reshape(-1)).reshape(th.shape + (n, n))
 
@@ -155,8 +183,11 @@ def rolling_ball(displacement, radius: float = 1.0,
 
 def frame(vectors) -> np.ndarray:
     """The rotation whose columns are ``vectors (..., K, N)`` (K ≤ N) after Gram–Schmidt,
-    completed with coordinate axes to a right-handed frame (det +1) when K < N. N vectors that
-    form a left-handed frame, or dependent vectors, raise ValueError."""
+    completed with coordinate axes to a right-handed frame (det +1) when K < N: each next
+    column is the axis least in the span so far (the lowest index on ties), orthogonalized, so
+    ``frame([])`` and ``frame([e_0])`` are the identity and ``frame([a])[:, 1]`` is the axis
+    least aligned with a. N vectors that form a left-handed frame, or dependent vectors, raise
+    ValueError."""
     v = _array("vectors", vectors, 2, "(..., K, N)")
     n = _n("vectors", v.shape[-1], v.shape)
     k = v.shape[-2]
@@ -164,6 +195,19 @@ def frame(vectors) -> np.ndarray:
         raise ValueError(f"vectors: expected shape (..., K, N) with K ≤ N, got {v.shape}")
     batch = v.shape[:-2]
     return _k.frame(n, k, _count(batch), _c(v).reshape(-1)).reshape(batch + (n, n))
+
+
+def rotation_between(a, b) -> np.ndarray:
+    """The minimal rotation taking unit vectors ``a`` to ``b`` ``(..., N)`` (batch axes
+    broadcast) → ``(..., N, N)``: it turns a toward b in their plane and fixes everything
+    orthogonal to both (``R v = v − (a + b)((a + b)·v)/(1 + a·b) + 2b(a·v)``), built as a
+    product of two reflections so it is exactly orthogonal with det +1. Antipodal pairs turn by
+    π in the plane of a and the coordinate axis least aligned with a."""
+    av = _array("a", a, 1, "(..., N)")
+    n = _n("a", av.shape[-1], av.shape)
+    bv = _fixed("b", b, n, " to match a")
+    batch, (av, bv) = _broadcast([("a", av, 1), ("b", bv, 1)])
+    return _k.rotation_between(n, av.reshape(-1), bv.reshape(-1)).reshape(batch + (n, n))
 
 
 def look_at(position, target, up=None) -> np.ndarray:
@@ -265,8 +309,13 @@ def quat_to_matrix(q) -> np.ndarray:
 
 def matrix_to_quat(R, continuous: bool = True) -> np.ndarray:
     """Unit quaternions of 3D rotations ``(..., 3, 3)`` → ``(..., 4)`` (Shepperd's method).
-    Each has q0 ≥ 0, unless ``continuous`` and R has a sequence axis 0 (``R.ndim ≥ 3``): then
-    the signs along axis 0 make consecutive quaternions have non-negative dot products."""
+
+    ``continuous=True`` (the default) reads axis 0 of a batch ``(T, ..., 3, 3)`` as a sequence:
+    the first quaternion has q0 ≥ 0 and each later one the sign that makes its dot product with
+    the previous one (along axis 0) non-negative — q and −q are the same rotation, and this
+    choice gives continuous curves on S³. So items after the first may have q0 < 0. For a batch
+    of *unrelated* rotations pass ``continuous=False``: then every quaternion has q0 ≥ 0
+    (rotation angle in [0, π]). A single matrix (3, 3) always gets q0 ≥ 0."""
     m = _array("R", R, 2, "(..., 3, 3)")
     if m.shape[-2:] != (3, 3):
         raise ValueError(f"R: expected shape (..., 3, 3), got {m.shape}")

@@ -79,6 +79,25 @@ fn frame<'py>(py: Python<'py>, dim: usize, k: usize, batch: usize, vectors: Arr<
 }
 
 #[pyfunction]
+fn rotation_between<'py>(py: Python<'py>, dim: usize, a: Arr<'py>, b: Arr<'py>) -> Out<'py> {
+    let (a, b) = (flat(&a, "a")?, flat(&b, "b")?);
+    run(py, a.len() * dim, |o| batch::rotation_between(dim, a, b, o))
+}
+
+/// Raises ValueError `<arg>: not a unit <what> …` unless every `width`-float item is a unit
+/// vector to `UNIT_TOLERANCE`.
+#[pyfunction]
+fn check_units(arg: &str, buf: Arr<'_>, width: usize, what: &str) -> PyResult<()> {
+    batch::check_units(arg, flat(&buf, arg)?, width, what).map_err(to_py_err)
+}
+
+/// Raises ValueError naming `arg` unless every `(dim, dim)` item is a rotation.
+#[pyfunction]
+fn check_rotations(arg: &str, dim: usize, buf: Arr<'_>) -> PyResult<()> {
+    batch::check_rotations(arg, dim, flat(&buf, arg)?).map_err(to_py_err)
+}
+
+#[pyfunction]
 fn look_at<'py>(
     py: Python<'py>,
     dim: usize,
@@ -211,6 +230,18 @@ pub fn register(parent: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(compose, &m)?)?;
     m.add_function(wrap_pyfunction!(rolling_ball, &m)?)?;
     m.add_function(wrap_pyfunction!(frame, &m)?)?;
+    m.add_function(wrap_pyfunction!(rotation_between, &m)?)?;
+    m.add_function(wrap_pyfunction!(check_units, &m)?)?;
+    m.add_function(wrap_pyfunction!(check_rotations, &m)?)?;
+    m.add("UNIT_TOLERANCE", ndtrace::rotation::UNIT_TOLERANCE)?;
+    m.add(
+        "SCENE_UNIT_TOLERANCE",
+        ndtrace::rotation::SCENE_UNIT_TOLERANCE,
+    )?;
+    m.add(
+        "ORTHOGONALITY_TOLERANCE",
+        ndtrace::rotation::ORTHOGONALITY_TOLERANCE,
+    )?;
     m.add_function(wrap_pyfunction!(look_at, &m)?)?;
     m.add_function(wrap_pyfunction!(slerp, &m)?)?;
     m.add_function(wrap_pyfunction!(to_nested_spheres, &m)?)?;

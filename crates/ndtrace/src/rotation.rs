@@ -35,8 +35,15 @@ use serde::{Deserialize, Serialize};
 /// A quaternion `[q0, q1, q2, q3]`, q0 the scalar part.
 pub type Quat = [f64; 4];
 
-/// Tolerance on `| |q| − 1 |` for inputs that must be unit vectors or unit quaternions.
+/// Tolerance on `| |q| − 1 |` for *computed* inputs that must be unit vectors or unit
+/// quaternions: every argument of this module's API (and of `ndtrace.rotation` and
+/// `ndtrace.frames` in Python). Such inputs are used as given, not renormalized.
 pub const UNIT_TOLERANCE: f64 = 1e-9;
+/// Tolerance on `| |q| − 1 |` for quaternions *typed by hand* into a scene file (a `rotate`
+/// transform's `quaternions = [q, p]`, an animation's quaternions): `[0.7071, 0.7071, 0, 0]`
+/// (|q| = 0.99999) is accepted, a typo such as `[0.65, 0.65, 0.65, 0.65]` (|q| = 1.3) is not.
+/// Accepted quaternions are normalized ([`scene_quaternion`]).
+pub const SCENE_UNIT_TOLERANCE: f64 = 1e-3;
 /// Tolerance on the largest entry of `RᵀR − I` for inputs that must be rotations.
 pub const ORTHOGONALITY_TOLERANCE: f64 = 1e-9;
 
@@ -44,15 +51,47 @@ pub const ORTHOGONALITY_TOLERANCE: f64 = 1e-9;
 // Validation
 // ---------------------------------------------------------------------------------------------
 
+/// `|v|` when `v` is finite with `| |v| − 1 | ≤ tolerance`, else the message
+/// `not a unit <what> (|<symbol>| = <len>)` (or which entry is not finite).
+fn unit_length(v: &[f64], what: &str, symbol: &str, tolerance: f64) -> Result<f64, String> {
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        return Err(format!("non-finite value {} at index {i}", v[i]));
+    }
+    let len = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if (len - 1.0).abs() <= tolerance {
+        Ok(len)
+    } else {
+        Err(format!("not a unit {what} (|{symbol}| = {len})"))
+    }
+}
+
 /// `None` when `v` is finite with `| |v| − 1 | ≤` [`UNIT_TOLERANCE`], else the message
 /// `not a unit <what> (|<symbol>| = <len>)`.
 pub fn unit_problem(v: &[f64], what: &str, symbol: &str) -> Option<String> {
-    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-        return Some(format!("non-finite value {} at index {i}", v[i]));
+    unit_length(v, what, symbol, UNIT_TOLERANCE).err()
+}
+
+/// A quaternion from a scene file: accepted when finite with `| |q| − 1 | ≤`
+/// [`SCENE_UNIT_TOLERANCE`] (four typed digits are enough) and returned normalized, so that
+/// the rotation built from it is exactly orthogonal. The error is the message
+/// `not a unit <what> (|<symbol>| = <len>)`, for the caller to prefix with the scene path.
+pub fn scene_quaternion(q: &Quat, what: &str, symbol: &str) -> Result<Quat, String> {
+    let len = unit_length(q, what, symbol, SCENE_UNIT_TOLERANCE)?;
+    Ok(q.map(|x| x / len))
+}
+
+/// `Ok` when `i`, `j` are two different axes of R^n (numbered from 0), the plane of a plane
+/// rotation R_ij; else the message `expected two different axes in 0..{n−1} (dim = n), got
+/// [i, j]`.
+pub fn check_plane(i: usize, j: usize, n: usize) -> Result<(), String> {
+    if i < n && j < n && i != j {
+        Ok(())
+    } else {
+        Err(format!(
+            "expected two different axes in 0..{} (dim = {n}), got [{i}, {j}]",
+            n.saturating_sub(1)
+        ))
     }
-    let len = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    (!((len - 1.0).abs() <= UNIT_TOLERANCE))
-        .then(|| format!("not a unit {what} (|{symbol}| = {len})"))
 }
 
 /// Checks that `v` is a unit vector; the error names `arg`.
@@ -112,12 +151,12 @@ pub fn check_rotation<const N: usize>(m: &Matrix<N>, arg: &str) -> NdResult<()> 
 /// `R·e_j = −sin θ·e_i + cos θ·e_j`; the other N − 2 axes are fixed.
 ///
 /// # Panics
-/// If `i == j` or either is ≥ N.
+/// If `i == j` or either is ≥ N (see [`check_plane`], which callers with untrusted input use
+/// first).
 pub fn plane_rotation<const N: usize>(i: usize, j: usize, theta: f64) -> Matrix<N> {
-    assert!(
-        i < N && j < N && i != j,
-        "plane_rotation: need two different axes in 0..{N}, got ({i}, {j})"
-    );
+    if let Err(message) = check_plane(i, j, N) {
+        panic!("plane_rotation: {message}");
+    }
     let mut m: Matrix<N> = identity();
     let (s, c) = theta.sin_cos();
     m[i][i] = c;
@@ -143,13 +182,7 @@ pub fn rotation_between<const N: usize>(a: &Vector<N>, b: &Vector<N>) -> Matrix<
     if dot(&w, &w) > 0.0 {
         return two_reflections(b, &w);
     }
-    let k = (0..N)
-        .min_by(|&x, &y| a[x].abs().total_cmp(&a[y].abs()))
-        .unwrap_or(0);
-    let mut u = [0.0; N];
-    u[k] = 1.0;
-    let u = crate::linalg::add_scaled(&u, -a[k], a);
-    two_reflections(b, &u)
+    two_reflections(b, &least_spanned_axis(&[*a]))
 }
 
 /// `(I − 2 b bᵀ)(I − 2 ŵ ŵᵀ)`, ŵ = w/|w|: reflecting across ŵ^⊥ and then across b^⊥. With
@@ -259,7 +292,9 @@ pub fn rolling_ball<const N: usize>(
 /// The rotation whose columns are the given vectors after Gram–Schmidt ("Columns are Axes"):
 /// column k is the part of `vectors[k]` orthogonal to the columns before it, normalized. With
 /// K < N vectors the frame is completed by the coordinate axes that are least in the span so
-/// far, and the last column's sign is chosen so that det = +1.
+/// far ([`least_spanned_axis`], lowest index on ties), and the last column's sign is chosen so
+/// that det = +1. So `frame([])` and `frame([e_0])` are the identity, and `frame([a])` is
+/// `[a, e, …]` with e the axis least aligned with a, orthogonalized.
 ///
 /// Errors: more than N vectors; a non-finite vector; a vector (nearly) dependent on the ones
 /// before it (residual ≤ 1e-9 of its length); N vectors forming a left-handed frame.
@@ -292,17 +327,8 @@ pub fn frame<const N: usize>(vectors: &[Vector<N>]) -> NdResult<Matrix<N>> {
     }
     let given = cols.len();
     while cols.len() < N {
-        // The coordinate axis with the largest part outside the span so far.
-        let best = (0..N)
-            .map(|a| {
-                let mut e = [0.0; N];
-                e[a] = 1.0;
-                orthogonal_part(&e, &cols)
-            })
-            .max_by(|x, y| norm(x).total_cmp(&norm(y)))
-            .expect("N ≥ 1");
-        let l = norm(&best);
-        cols.push(scale(&best, 1.0 / l));
+        let next = least_spanned_axis(&cols);
+        cols.push(next);
     }
     let mut m: Matrix<N> = std::array::from_fn(|r| std::array::from_fn(|c| cols[c][r]));
     if det(&m) < 0.0 {
@@ -321,6 +347,27 @@ pub fn frame<const N: usize>(vectors: &[Vector<N>]) -> NdResult<Matrix<N>> {
         }
     }
     Ok(m)
+}
+
+/// The coordinate axis least in the span of the orthonormal `axes` (fewer than N), made
+/// orthogonal to them and normalized: e_k minus its projections, for the k with the largest
+/// remainder, **the lowest such k on ties** (so `frame([])` and `frame([e_0])` are the
+/// identity). For one unit vector a the remainder is `√(1 − a_k²)`: the axis least aligned with
+/// a. This is the one fallback used wherever a direction must be completed: [`frame`]'s missing
+/// columns, and the plane of [`rotation_between`] and [`slerp`] for antipodal vectors.
+pub fn least_spanned_axis<const N: usize>(axes: &[Vector<N>]) -> Vector<N> {
+    let mut best = ([0.0; N], -1.0);
+    for k in 0..N {
+        let mut e = [0.0; N];
+        e[k] = 1.0;
+        let w = orthogonal_part(&e, axes);
+        let l = norm(&w);
+        // Strictly larger: ties keep the lower index.
+        if l > best.1 {
+            best = (w, l);
+        }
+    }
+    scale(&best.0, 1.0 / best.1)
 }
 
 /// `v` minus its projections on the orthonormal `axes` (modified Gram–Schmidt, done twice:
@@ -378,12 +425,7 @@ pub fn slerp<const N: usize>(a: &Vector<N>, b: &Vector<N>, t: f64) -> Vector<N> 
         if c > 0.0 {
             return *a;
         }
-        let k = (0..N)
-            .min_by(|&x, &y| a[x].abs().total_cmp(&a[y].abs()))
-            .unwrap_or(0);
-        let mut e = [0.0; N];
-        e[k] = 1.0;
-        u = crate::linalg::add_scaled(&e, -a[k], a);
+        u = least_spanned_axis(&[*a]);
         sin = 0.0;
     }
     let u = scale(&u, 1.0 / norm(&u));

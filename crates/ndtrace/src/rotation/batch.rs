@@ -78,15 +78,10 @@ pub fn plane_rotation(
     thetas: &[f64],
     out: &mut [f64],
 ) -> NdResult<()> {
-    if i >= dim || j >= dim || i == j {
-        return Err(NdError::Value {
-            arg: "i, j".into(),
-            message: format!(
-                "expected two different axes in 0..{} (n = {dim}), got ({i}, {j})",
-                dim.saturating_sub(1)
-            ),
-        });
-    }
+    check_plane(i, j, dim).map_err(|message| NdError::Value {
+        arg: "i, j".into(),
+        message,
+    })?;
     finite("theta", thetas)?;
     with_dim!(dim, N => {
         check_len("out", out, N * N, thetas.len(), "(N, N)")?;
@@ -162,6 +157,39 @@ pub fn frame(dim: usize, k: usize, vectors: &[f64], out: &mut [f64]) -> NdResult
             })?;
         }
         Ok(())
+    })?
+}
+
+/// [`rotation_between`] of unit vectors `a`, `b` `(B, N)` → `(B, N, N)`: the minimal rotation
+/// taking each a to its b (antipodal pairs turn in the plane of a and its least aligned axis).
+pub fn rotation_between(dim: usize, a: &[f64], b: &[f64], out: &mut [f64]) -> NdResult<()> {
+    with_dim!(dim, N => {
+        let n = batch_len("a", a, N, "(N,)")?;
+        check_len("b", b, N, n, "(N,)")?;
+        check_len("out", out, N * N, n, "(N, N)")?;
+        unit_items("a", a, N, "vector")?;
+        unit_items("b", b, N, "vector")?;
+        let (av, bv) = (as_vectors::<N>(a), as_vectors::<N>(b));
+        for ((o, x), y) in as_matrices_mut::<N>(out).iter_mut().zip(av).zip(bv) {
+            *o = super::rotation_between(x, y);
+        }
+        Ok(())
+    })?
+}
+
+/// Checks that every `width`-float item of `buf` is a unit vector (to [`UNIT_TOLERANCE`]); the
+/// error names `arg` and the item: the check of the Python modules' unit arguments.
+pub fn check_units(arg: &str, buf: &[f64], width: usize, what: &str) -> NdResult<()> {
+    batch_len(arg, buf, width, &format!("({width},)"))?;
+    unit_items(arg, buf, width, what)
+}
+
+/// Checks that every `(N, N)` matrix of `buf` is a rotation ([`rotation_problem`]); the error
+/// names `arg` and the item.
+pub fn check_rotations(arg: &str, dim: usize, buf: &[f64]) -> NdResult<()> {
+    with_dim!(dim, N => {
+        batch_len(arg, buf, N * N, "(N, N)")?;
+        rotation_items(arg, as_matrices::<N>(buf))
     })?
 }
 
@@ -421,6 +449,57 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("R: is a reflection"), "{e}");
+    }
+
+    #[test]
+    fn checks_and_rotation_between_name_the_item() {
+        let e = plane_rotation(4, 2, 2, &[0.0], &mut [0.0; 16])
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "i, j: expected two different axes in 0..3 (dim = 4), got [2, 2]"
+        );
+        let a = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        let b = [0.0, 1.0, 0.0, 0.0, 1.0, 1e-4];
+        let e = rotation_between(3, &a, &b, &mut [0.0; 18])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("b: not a unit vector (|b| = 1.000000005")
+                && e.ends_with("at batch index 1"),
+            "{e}"
+        );
+        let mut out = [0.0; 18];
+        rotation_between(3, &a, &[0.0, 1.0, 0.0, 0.0, -1.0, 0.0], &mut out).unwrap();
+        let want = [0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+        assert!(
+            out[..9]
+                .iter()
+                .zip(want)
+                .all(|(x, y)| (x - y).abs() < 1e-15),
+            "{out:?}"
+        );
+        // The antipodal pair turns by π in the plane of e_1 and e_0 (its least aligned axis).
+        let want = [-1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 1.0];
+        assert!(
+            out[9..]
+                .iter()
+                .zip(want)
+                .all(|(x, y)| (x - y).abs() < 1e-15),
+            "{out:?}"
+        );
+        assert!(check_units("q", &[1.0, 0.0, 0.0, 0.0], 4, "quaternion").is_ok());
+        let e = check_units("q", &[1.0, 0.0, 0.0], 4, "quaternion")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("q: expected shape"), "{e}");
+        let refl = [1.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, -1.0];
+        let e = check_rotations("R", 2, &refl).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "R: is a reflection (det = −1), not a rotation (det = +1) at batch index 1"
+        );
     }
 
     #[test]

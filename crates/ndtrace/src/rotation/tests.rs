@@ -249,6 +249,76 @@ fn frames_are_right_handed_gram_schmidt() {
     for_each_dim!(frames_are_rotations);
 }
 
+fn missing_axes_are_filled_in_order<const N: usize>() {
+    // Ties go to the lowest axis: nothing given, or e_0 given, is the identity exactly.
+    let id: Matrix<N> = identity();
+    assert_eq!(frame::<N>(&[]).unwrap(), id, "N={N}");
+    assert_eq!(frame(&[col(&id, 0)]).unwrap(), id, "N={N}");
+    // e_0 and e_1 given: still the identity; e_1 alone: e_0 comes next, the last flips.
+    assert_eq!(frame(&[col(&id, 0), col(&id, 1)]).unwrap(), id, "N={N}");
+    if N >= 3 {
+        let m = frame(&[col(&id, 1)]).unwrap();
+        assert_eq!(col(&m, 1), col(&id, 0), "N={N}");
+    }
+    // One vector: the next column is the axis least aligned with it, orthogonalized.
+    let mut r = rng(7150 + N as u64);
+    let mut a = random_unit::<N>(&mut r);
+    a[N - 1] = 0.01;
+    let a = scale(&a, 1.0 / norm(&a));
+    let k = (0..N)
+        .min_by(|&x, &y| a[x].abs().total_cmp(&a[y].abs()))
+        .unwrap();
+    let want = scale(
+        &add_scaled(&col(&id, k), -a[k], &a),
+        1.0 / (1.0 - a[k] * a[k]).sqrt(),
+    );
+    if N >= 3 {
+        // (In 2D the second column is the last one, whose sign makes det = +1.)
+        let m = frame(&[a]).unwrap();
+        assert!(norm(&sub(&col(&m, 1), &want)) < 1e-14, "N={N}");
+    }
+    assert!(
+        norm(&sub(&least_spanned_axis(&[a]), &want)) < 1e-14,
+        "N={N}"
+    );
+}
+
+#[test]
+fn frame_fills_missing_axes_lowest_index_first() {
+    for_each_dim!(missing_axes_are_filled_in_order);
+}
+
+fn minimal_rotations<const N: usize>() {
+    let mut r = rng(7160 + N as u64);
+    for _ in 0..20 {
+        let a = random_unit::<N>(&mut r);
+        let b = random_unit::<N>(&mut r);
+        let m = rotation_between(&a, &b);
+        assert_rotation(&m, "rotation_between");
+        assert!(norm(&sub(&mat_vec(&m, &a), &b)) < 1e-14);
+        // Fixes what is orthogonal to a and b.
+        if N >= 3 {
+            let w = col(&frame(&[a, b]).unwrap(), 2);
+            assert!(norm(&sub(&mat_vec(&m, &w), &w)) < 1e-14, "N={N}");
+        }
+        // Antipodal: a rotation by π in the plane of a and its least aligned axis.
+        let na = scale(&a, -1.0);
+        let m = rotation_between(&a, &na);
+        assert_rotation(&m, "rotation_between(a, −a)");
+        assert!(norm(&sub(&mat_vec(&m, &a), &na)) < 1e-14);
+        let e = least_spanned_axis(&[a]);
+        assert!(
+            norm(&add_scaled(&mat_vec(&m, &e), 1.0, &e)) < 1e-14,
+            "N={N}"
+        );
+    }
+}
+
+#[test]
+fn rotation_between_takes_a_to_b_in_their_plane() {
+    for_each_dim!(minimal_rotations);
+}
+
 fn look_at_is_the_camera<const N: usize>() {
     if N < 2 {
         return;
@@ -582,6 +652,56 @@ fn arcball_4d_maps_the_point_pairs() {
 }
 
 // -- validation --------------------------------------------------------------------------------
+
+#[test]
+#[allow(clippy::approx_constant)] // 0.7071 is the point: 1/√2 as a user types it
+fn scene_quaternions_may_be_typed_to_four_digits() {
+    // |q| = 0.99999041: rejected by the strict check, accepted (and normalized) for scenes.
+    let typed = [0.7071, 0.7071, 0.0, 0.0];
+    assert!(unit_problem(&typed, "quaternion", "q").is_some());
+    let q = scene_quaternion(&typed, "quaternion", "q").unwrap();
+    assert!((norm(&q) - 1.0).abs() < 1e-15);
+    let exact = [0.5f64.sqrt(), 0.5f64.sqrt(), 0.0, 0.0];
+    assert!(norm(&sub(&q, &exact)) < 1e-15, "{q:?}");
+    let m = max_diff(&quat_to_matrix(&typed), &quat_to_matrix(&exact));
+    assert!(m > 1e-5, "the unnormalized matrix is visibly off: {m}");
+    assert_eq!(
+        scene_quaternion(&[1.01, 0.0, 0.0, 0.0], "quaternion", "p").unwrap_err(),
+        "not a unit quaternion (|p| = 1.01)"
+    );
+    assert_eq!(
+        scene_quaternion(&[0.9989, 0.0, 0.0, 0.0], "quaternion", "q").unwrap_err(),
+        "not a unit quaternion (|q| = 0.9989)"
+    );
+    assert!(
+        scene_quaternion(&[f64::NAN, 0.0, 0.0, 1.0], "quaternion", "q")
+            .unwrap_err()
+            .contains("non-finite")
+    );
+    assert!(scene_quaternion(&[0.0; 4], "quaternion", "q").is_err());
+}
+
+#[test]
+fn plane_check_names_the_axes() {
+    assert_eq!(check_plane(0, 3, 4), Ok(()));
+    assert_eq!(
+        check_plane(1, 1, 4).unwrap_err(),
+        "expected two different axes in 0..3 (dim = 4), got [1, 1]"
+    );
+    assert_eq!(
+        check_plane(0, 3, 3).unwrap_err(),
+        "expected two different axes in 0..2 (dim = 3), got [0, 3]"
+    );
+    assert!(check_plane(0, 1, 0).is_err());
+}
+
+#[test]
+#[should_panic(
+    expected = "plane_rotation: expected two different axes in 0..2 (dim = 3), got [2, 2]"
+)]
+fn plane_rotation_panics_with_the_plane_check_message() {
+    plane_rotation::<3>(2, 2, 0.1);
+}
 
 #[test]
 fn validation_names_the_problem() {

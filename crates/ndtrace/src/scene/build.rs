@@ -8,7 +8,9 @@ use crate::accel::{Bvh, PreparedSimplex};
 use crate::camera::{look_at_orientation, Camera};
 use crate::linalg::{add, det, dot, identity, mat_mul, mat_vec, norm, scale, Matrix, Vector};
 use crate::mesh::Mesh;
-use crate::rotation::{plane_rotation, rolling_ball, so4_from_quaternions, unit_problem};
+use crate::rotation::{
+    check_plane, plane_rotation, rolling_ball, scene_quaternion, so4_from_quaternions, Quat,
+};
 use crate::shapes;
 use rayon::prelude::*;
 use std::path::Path;
@@ -455,15 +457,7 @@ fn rotate<const N: usize>(r: &RotateDesc, path: &str) -> R<Matrix<N>> {
         belongs("angle", r.angle.is_some(), "rolling")?;
     }
     if let Some([i, j]) = r.plane {
-        if i >= N || j >= N || i == j {
-            return Err(PathError::new(
-                format!("{path}.plane"),
-                format!(
-                    "expected two different axes in 0..{} (dim = {N}), got [{i}, {j}]",
-                    N - 1
-                ),
-            ));
-        }
+        check_plane(i, j, N).map_err(|m| PathError::new(format!("{path}.plane"), m))?;
         let degrees = r
             .degrees
             .ok_or_else(|| PathError::new(path, "plane needs degrees (the angle)"))?;
@@ -491,7 +485,7 @@ fn rotate<const N: usize>(r: &RotateDesc, path: &str) -> R<Matrix<N>> {
                 ),
             ));
         }
-        let mut pair = [[0.0; 4]; 2];
+        let mut pair: [Quat; 2] = [[0.0; 4]; 2];
         for (k, (v, symbol)) in qp.iter().zip(["q", "p"]).enumerate() {
             let vpath = format!("{qpath}[{k}]");
             if v.len() != 4 {
@@ -504,10 +498,10 @@ fn rotate<const N: usize>(r: &RotateDesc, path: &str) -> R<Matrix<N>> {
                 ));
             }
             finite_list(v, &vpath)?;
-            if let Some(message) = unit_problem(v, "quaternion", symbol) {
-                return Err(PathError::new(vpath, message));
-            }
-            pair[k].copy_from_slice(v);
+            // Hand-typed: |q| within SCENE_UNIT_TOLERANCE of 1, then normalized.
+            let q: Quat = std::array::from_fn(|c| v[c]);
+            pair[k] =
+                scene_quaternion(&q, "quaternion", symbol).map_err(|m| PathError::new(vpath, m))?;
         }
         let m = so4_from_quaternions(&pair[0], &pair[1]);
         // N = 4 here; copy into the generic matrix type.
