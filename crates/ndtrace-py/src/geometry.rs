@@ -1,21 +1,9 @@
 //! Kernels behind `ndtrace.geometry`: flat C-contiguous float64 buffers plus `dim` and `batch`
 //! in, a flat float64 array out (reshaped by the Python wrapper).
 
-use crate::errors::to_py_err;
+use crate::buffers::{flat, run, Arr, Out};
 use ndtrace::batch::{self, OnDegenerate};
-use ndtrace::NdResult;
-use numpy::{PyArray1, PyReadonlyArrayDyn};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-
-type Arr<'py> = PyReadonlyArrayDyn<'py, f64>;
-type Out<'py> = PyResult<Bound<'py, PyArray1<f64>>>;
-
-fn flat<'a>(a: &'a Arr<'_>, name: &str) -> PyResult<&'a [f64]> {
-    a.as_slice().map_err(|_| {
-        PyValueError::new_err(format!("{name}: expected a C-contiguous float64 array"))
-    })
-}
 
 fn on_degenerate(raise: bool) -> OnDegenerate {
     if raise {
@@ -23,16 +11,6 @@ fn on_degenerate(raise: bool) -> OnDegenerate {
     } else {
         OnDegenerate::Nan
     }
-}
-
-/// Allocates the output, runs the core with the GIL released, hands the buffer to numpy.
-fn run<'py, F>(py: Python<'py>, len: usize, f: F) -> Out<'py>
-where
-    F: FnOnce(&mut [f64]) -> NdResult<()> + Send,
-{
-    let mut out = vec![0.0; len];
-    py.detach(|| f(&mut out)).map_err(to_py_err)?;
-    Ok(PyArray1::from_vec(py, out))
 }
 
 #[pyfunction]

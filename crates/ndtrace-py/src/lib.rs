@@ -5,6 +5,7 @@
 
 use pyo3::prelude::*;
 
+mod buffers;
 mod composite;
 mod errors;
 mod files;

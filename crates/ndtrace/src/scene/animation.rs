@@ -27,7 +27,8 @@ use super::desc::*;
 use super::errors::PathError;
 use crate::linalg::{add, mat_mul, mat_vec, sub, Matrix, Vector};
 use crate::rotation::{
-    plane_rotation, rolling_ball, slerp_so4, so4_from_quaternions, unit_problem, Quat,
+    check_plane, plane_rotation, rolling_ball, scene_quaternion, slerp_so4, so4_from_quaternions,
+    Quat,
 };
 use crate::{with_dim, NdError};
 
@@ -106,10 +107,7 @@ fn center<const N: usize>(a: &AnimationDesc) -> R<Vector<N>> {
 }
 
 fn unit_quaternion(q: &Quat, path: &str, symbol: &str) -> R<Quat> {
-    match unit_problem(q, "quaternion", symbol) {
-        Some(message) => Err(PathError::new(path, message)),
-        None => Ok(*q),
-    }
+    scene_quaternion(q, "quaternion", symbol).map_err(|message| PathError::new(path, message))
 }
 
 /// The rotation M(t) of the animation's one motion (validated on the way).
@@ -123,15 +121,7 @@ pub fn motion<const N: usize>(a: &AnimationDesc, t: f64) -> R<Matrix<N>> {
     }
     if let Some(s) = &a.sweep {
         let [i, j] = s.plane;
-        if i >= N || j >= N || i == j {
-            return Err(PathError::new(
-                "animation.sweep.plane",
-                format!(
-                    "expected two different axes in 0..{} (dim = {N}), got [{i}, {j}]",
-                    N - 1
-                ),
-            ));
-        }
+        check_plane(i, j, N).map_err(|m| PathError::new("animation.sweep.plane", m))?;
         if let Some(k) = s.degrees.iter().position(|d| !d.is_finite()) {
             return Err(PathError::new(
                 format!("animation.sweep.degrees[{k}]"),
