@@ -16,6 +16,18 @@ fn with_index(message: String, index: usize, batch: usize) -> String {
     }
 }
 
+/// A core error about item `index` of a batch of `batch`, with the index added to a value
+/// error's message.
+fn at_index(e: NdError, index: usize, batch: usize) -> NdError {
+    match e {
+        NdError::Value { arg, message } => NdError::Value {
+            arg,
+            message: with_index(message, index, batch),
+        },
+        other => other,
+    }
+}
+
 /// Every `width`-float item of `buf` is a unit vector ("quaternion" or "vector").
 fn unit_items(arg: &str, buf: &[f64], width: usize, what: &str) -> NdResult<()> {
     let batch = buf.len() / width;
@@ -148,13 +160,7 @@ pub fn frame(dim: usize, k: usize, vectors: &[f64], out: &mut [f64]) -> NdResult
         check_len("out", out, N * N, b, "(N, N)")?;
         let vs = as_vectors::<N>(vectors);
         for (idx, o) in as_matrices_mut::<N>(out).iter_mut().enumerate() {
-            *o = super::frame(&vs[idx * k..(idx + 1) * k]).map_err(|e| match e {
-                NdError::Value { arg, message } => NdError::Value {
-                    arg,
-                    message: with_index(message, idx, b),
-                },
-                other => other,
-            })?;
+            *o = super::frame(&vs[idx * k..(idx + 1) * k]).map_err(|e| at_index(e, idx, b))?;
         }
         Ok(())
     })?
@@ -264,13 +270,7 @@ pub fn from_nested_spheres(dim: usize, packed: &[f64], out: &mut [f64]) -> NdRes
                 vs.push(p[at..at + k].to_vec());
                 at += k;
             }
-            *o = super::from_nested_spheres::<N>(&vs).map_err(|e| match e {
-                NdError::Value { arg, message } => NdError::Value {
-                    arg,
-                    message: with_index(message, idx, b),
-                },
-                other => other,
-            })?;
+            *o = super::from_nested_spheres::<N>(&vs).map_err(|e| at_index(e, idx, b))?;
         }
         Ok(())
     })?
