@@ -6,16 +6,20 @@
 
 from . import _ndtrace
 from . import geometry
+from . import rotation
+from . import frames
 from .retina import Retina, trace
 from .composite import composite
 from .files import read_exr, write_exr, write_png
 from .scene import Scene, load_dict, load_file, load_toml
+from . import animation
+from .animation import animate
 
 __version__: str = _ndtrace.__version__
 MIN_DIM: int = _ndtrace.MIN_DIM
 MAX_DIM: int = _ndtrace.MAX_DIM
 
 __all__ = [
-    "geometry", "Scene", "Retina", "trace", "composite", "read_exr", "write_exr", "write_png", "load_file", "load_dict", "load_toml",
+    "geometry", "rotation", "frames", "Scene", "Retina", "trace", "composite", "read_exr", "write_exr", "write_png", "load_file", "load_dict", "load_toml", "animation", "animate",
     "MIN_DIM", "MAX_DIM", "__version__",
 ]

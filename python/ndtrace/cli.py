@@ -4,6 +4,7 @@
     ndtrace scenes/tesseract.toml -o tesseract.exr --retina retina.exr --samples 4
     ndtrace scenes/penteract.toml -o penteract.png --composite mip --view 40,25 --size 800x600
     ndtrace my_scene.py -o out.png          # a Python script defining scene() -> ndtrace.Scene
+    ndtrace scenes/tesseract_spin.toml -o spin.gif --frames 24   # the scene's [animation]
 
 The whole scene is validated before any work; errors are one line on stderr (exit status 2),
 with a traceback only under --debug. Ctrl-C stops within a second, leaves no partial output
@@ -80,7 +81,9 @@ def _parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("scene", help="a .toml scene, or a .py script defining scene() -> ndtrace.Scene")
-    p.add_argument("-o", "--output", required=True, help="the picture to write: .png or .exr")
+    p.add_argument("-o", "--output", required=True,
+                   help="the picture to write: .png or .exr; for an animation .png (numbered "
+                   "frames out_0001.png … plus a video), .gif or .mp4")
     p.add_argument("--retina", metavar="FILE.exr", help="also write the traced retina there")
     p.add_argument("--resolution", help="cells per retina axis: R or R1,R2,… (overrides the camera's)")
     p.add_argument("--samples", type=int, help="rays per retina cell")
@@ -90,6 +93,10 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--composite", choices=COMPOSITES, help="how the retina becomes a picture")
     p.add_argument("--view", metavar="AZIMUTH,ELEVATION", help="compositing camera angles, degrees")
     p.add_argument("--size", metavar="WxH", help="picture size in pixels")
+    p.add_argument("--frames", type=int, metavar="K",
+                   help="render K frames of the scene's [animation] (implied by -o .gif/.mp4)")
+    p.add_argument("--video", choices=("gif", "mp4", "none"), default="gif",
+                   help="with --frames and -o .png: the video written beside the frames")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.add_argument("--version", action="version", version=f"ndtrace {__version__}")
@@ -137,7 +144,12 @@ def _check_output(path: str, exts: tuple[str, ...], option: str) -> None:
 def run(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     # 1. Validate everything before any work or progress output.
-    _check_output(args.output, (".png", ".exr"), "-o")
+    animating = args.frames is not None or args.output.lower().endswith((".gif", ".mp4"))
+    _check_output(args.output, (".png", ".gif", ".mp4") if animating else (".png", ".exr"), "-o")
+    if args.frames is not None and args.frames < 1:
+        raise UsageError(f"--frames: must be at least 1, got {args.frames}")
+    if animating and args.retina:
+        raise UsageError("--retina: a retina is written for a still, not for an animation")
     if args.retina:
         _check_output(args.retina, (".exr",), "--retina")
     if args.threads is not None and args.threads < 1:
@@ -175,6 +187,22 @@ def run(argv: list[str] | None = None) -> int:
     from .composite import composite
 
     bar = Progress(args.quiet)
+    if animating:
+        from .animation import animate
+
+        video = None if args.video == "none" else args.video
+        if scene.to_dict().get("animation") is None:
+            raise UsageError(f"{args.scene}: the scene has no [animation] table to render frames of")
+        bar.begin("frames")
+        paths = animate(scene, args.output, frames=args.frames, video=video,
+                        threads=args.threads, progress=bar.update)
+        bar.end()
+        if not args.quiet:
+            pngs = [p for p in paths if p.endswith(".png")]
+            videos = [p for p in paths if not p.endswith(".png")]
+            print(f"wrote {len(pngs)} frames {pngs[0]} … {pngs[-1]}"
+                  + (f" and {videos[0]}" if videos else ""), file=sys.stderr)
+        return 0
     bar.begin("tracing")
     retina = trace(scene, threads=args.threads, progress=bar.update)
     bar.end()

@@ -76,3 +76,10 @@ def write_png(path: str | os.PathLike, image) -> None:
     path = os.fspath(path)
     _check_ext(path, (".png",), "a PNG file")
     _ndtrace.write_png(path, _image("image", image))
+
+
+def to_srgb8(image, *, opaque: bool = False) -> np.ndarray:
+    """A picture ``(H, W, 4)`` (premultiplied linear RGBA) as 8-bit sRGB: ``(H, W, 4)`` with
+    straight alpha (what :func:`write_png` stores), or with ``opaque`` ``(H, W, 3)`` of the
+    colour as it is (the composite over its background: what GIF and MP4 frames show)."""
+    return _ndtrace.to_srgb8(_image("image", image), opaque)

@@ -83,6 +83,25 @@ fn write_png(py: Python<'_>, path: PathBuf, rgba: PyReadonlyArrayDyn<'_, f32>) -
     py.detach(|| files::write_png(&path, &p)).map_err(to_py_err)
 }
 
+/// A picture (H, W, 4) as 8-bit sRGB: (H, W, 4) with straight alpha, or (H, W, 3) opaque.
+#[pyfunction]
+#[pyo3(signature = (rgba, opaque=false))]
+fn to_srgb8<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArrayDyn<'_, f32>,
+    opaque: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let p = picture(&rgba, None)?;
+    let (h, w) = (p.height, p.width);
+    let bytes = py
+        .detach(|| files::to_srgb8(&p, opaque))
+        .map_err(to_py_err)?;
+    let channels = if opaque { 3 } else { 4 };
+    Ok(numpy::PyArray1::from_vec(py, bytes)
+        .reshape([h, w, channels])?
+        .into_any())
+}
+
 /// Reads an EXR into a dict: `kind` is "retina" (with the retina's arrays and `camera`) or
 /// "picture" (`rgba` (H, W, 4) and optional `depth`).
 #[pyfunction]
@@ -118,6 +137,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_retina_exr, m)?)?;
     m.add_function(wrap_pyfunction!(write_picture_exr, m)?)?;
     m.add_function(wrap_pyfunction!(write_png, m)?)?;
+    m.add_function(wrap_pyfunction!(to_srgb8, m)?)?;
     m.add_function(wrap_pyfunction!(read_exr, m)?)?;
     Ok(())
 }

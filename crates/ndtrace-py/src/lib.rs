@@ -9,6 +9,7 @@ mod composite;
 mod errors;
 mod files;
 mod geometry;
+mod rotation;
 mod scene;
 
 /// A rayon pool of `threads` workers, or `None` (the global pool, every core) for `None`.
@@ -37,6 +38,7 @@ fn _ndtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MIN_DIM", ndtrace::MIN_DIM)?;
     m.add("MAX_DIM", ndtrace::MAX_DIM)?;
     geometry::register(m)?;
+    rotation::register(m)?;
     scene::register(m)?;
     composite::register(m)?;
     files::register(m)?;

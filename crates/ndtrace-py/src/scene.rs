@@ -74,6 +74,13 @@ impl CompiledScene {
         pythonize::pythonize(py, &self.desc).map_err(|e| PyValueError::new_err(e.to_string()))
     }
 
+    /// The description of frame `k` of the scene's `[animation]` as plain Python data: the
+    /// scene with that frame's rotation applied to the animation's target, without the table.
+    fn animation_frame<'py>(&self, py: Python<'py>, k: u32) -> PyResult<Bound<'py, PyAny>> {
+        let frame = scene::animation_frame(&self.desc, k, "<scene>").map_err(to_py_err)?;
+        pythonize::pythonize(py, &frame).map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
     /// Whether two scenes have equal descriptions.
     fn same_description(&self, other: &CompiledScene) -> bool {
         self.desc == other.desc

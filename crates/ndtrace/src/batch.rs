@@ -28,7 +28,14 @@ fn as_points<const N: usize>(flat: &[f64]) -> &[Vector<N>] {
     points
 }
 
-fn check_len(arg: &str, buf: &[f64], per_item: usize, batch: usize, shape: &str) -> NdResult<()> {
+/// Checks that `buf` holds `batch` items of `per_item` floats.
+pub fn check_len(
+    arg: &str,
+    buf: &[f64],
+    per_item: usize,
+    batch: usize,
+    shape: &str,
+) -> NdResult<()> {
     if buf.len() != per_item * batch {
         return Err(NdError::Shape {
             arg: arg.into(),

@@ -350,8 +350,9 @@ pub fn linear_to_srgb(x: f32) -> f32 {
     }
 }
 
-/// Writes a picture as an 8-bit sRGB PNG with straight (un-premultiplied) alpha.
-pub fn write_png(path: &Path, p: &Picture) -> NdResult<()> {
+/// A picture as 8-bit sRGB bytes, row-major: RGBA with straight (un-premultiplied) alpha, or,
+/// with `opaque`, RGB of the picture's colour as it is (the composite over its background).
+pub fn to_srgb8(p: &Picture, opaque: bool) -> NdResult<Vec<u8>> {
     let n = p.width * p.height;
     if p.rgba.len() != n * 4 || n == 0 {
         return Err(NdError::Value {
@@ -359,15 +360,27 @@ pub fn write_png(path: &Path, p: &Picture) -> NdResult<()> {
             message: format!("expected ({}, {}, 4) values", p.height, p.width),
         });
     }
-    let mut bytes = Vec::with_capacity(n * 4);
+    let encode = |c: f32| (linear_to_srgb(c) * 255.0 + 0.5) as u8;
+    let mut bytes = Vec::with_capacity(n * if opaque { 3 } else { 4 });
     for px in p.rgba.chunks_exact(4) {
-        let a = px[3].clamp(0.0, 1.0);
-        for &c in &px[..3] {
-            let straight = if a > 0.0 { c / a } else { 0.0 };
-            bytes.push((linear_to_srgb(straight) * 255.0 + 0.5) as u8);
+        if opaque {
+            bytes.extend(px[..3].iter().map(|&c| encode(c)));
+            continue;
         }
+        let a = px[3].clamp(0.0, 1.0);
+        bytes.extend(
+            px[..3]
+                .iter()
+                .map(|&c| encode(if a > 0.0 { c / a } else { 0.0 })),
+        );
         bytes.push((a * 255.0 + 0.5) as u8);
     }
+    Ok(bytes)
+}
+
+/// Writes a picture as an 8-bit sRGB PNG with straight (un-premultiplied) alpha.
+pub fn write_png(path: &Path, p: &Picture) -> NdResult<()> {
+    let bytes = to_srgb8(p, false)?;
     write_atomically(path, |tmp| {
         image::save_buffer_with_format(
             tmp,

@@ -32,6 +32,7 @@ pub mod geometry;
 pub mod linalg;
 pub mod mesh;
 pub mod render;
+pub mod rotation;
 pub mod scene;
 pub mod shapes;
 

@@ -8,6 +8,7 @@ use crate::accel::{Bvh, PreparedSimplex};
 use crate::camera::{look_at_orientation, Camera};
 use crate::linalg::{add, det, dot, identity, mat_mul, mat_vec, norm, scale, Matrix, Vector};
 use crate::mesh::Mesh;
+use crate::rotation::{plane_rotation, rolling_ball, so4_from_quaternions, unit_problem};
 use crate::shapes;
 use rayon::prelude::*;
 use std::path::Path;
@@ -161,7 +162,7 @@ fn coefficient(c: &Coefficient, path: &str) -> R<Rgb> {
     }
 }
 
-fn matrix_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<Matrix<N>> {
+pub(crate) fn matrix_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<Matrix<N>> {
     if rows.len() != N {
         return Err(PathError::new(
             path,
@@ -402,25 +403,7 @@ fn transform<const N: usize>(list: &[TransformDesc], path: &str) -> R<(Matrix<N>
                 (scale_matrix(&s), [0.0; N])
             }
             TransformDesc::Translate(v) => (identity(), vec_n::<N>(v, &format!("{p}.translate"))?),
-            TransformDesc::Rotate(r) => {
-                let [i, j] = r.plane;
-                if i >= N || j >= N || i == j {
-                    return Err(PathError::new(
-                        format!("{p}.rotate.plane"),
-                        format!(
-                            "expected two different axes in 0..{} (dim = {N}), got [{i}, {j}]",
-                            N - 1
-                        ),
-                    ));
-                }
-                if !r.degrees.is_finite() {
-                    return Err(PathError::new(
-                        format!("{p}.rotate.degrees"),
-                        "must be finite",
-                    ));
-                }
-                (plane_rotation::<N>(i, j, r.degrees.to_radians()), [0.0; N])
-            }
+            TransformDesc::Rotate(r) => (rotate::<N>(r, &format!("{p}.rotate"))?, [0.0; N]),
             TransformDesc::Matrix(rows) => affine_rows::<N>(rows, &format!("{p}.matrix"))?,
         };
         // New map: x ↦ m·(a·x + b) + c.
@@ -430,20 +413,133 @@ fn transform<const N: usize>(list: &[TransformDesc], path: &str) -> R<(Matrix<N>
     Ok((a, b))
 }
 
-fn scale_matrix<const N: usize>(s: &[f64; N]) -> Matrix<N> {
-    std::array::from_fn(|i| std::array::from_fn(|j| if i == j { s[i] } else { 0.0 }))
+/// The matrix of a `rotate` transform: exactly one of the plane, double-quaternion (4D) and
+/// rolling-ball forms, with only the keys of that form.
+fn rotate<const N: usize>(r: &RotateDesc, path: &str) -> R<Matrix<N>> {
+    let forms = [
+        ("plane", r.plane.is_some()),
+        ("quaternions", r.quaternions.is_some()),
+        ("rolling", r.rolling.is_some()),
+    ];
+    let given: Vec<&str> = forms.iter().filter(|f| f.1).map(|f| f.0).collect();
+    match given[..] {
+        [] => {
+            return Err(PathError::new(
+                path,
+                "give one of plane (with degrees), quaternions = [q, p] (dim 4) or rolling (with radius)",
+            ))
+        }
+        [_] => {}
+        [first, second, ..] => {
+            return Err(PathError::new(
+                format!("{path}.{second}"),
+                format!("give only one of plane, quaternions or rolling, not both {first} and {second}"),
+            ))
+        }
+    }
+    let belongs = |key: &str, present: bool, form: &str| -> R<()> {
+        if present {
+            Err(PathError::new(
+                format!("{path}.{key}"),
+                format!("\"{key}\" goes with {form}, not with {}", given[0]),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    if r.plane.is_none() {
+        belongs("degrees", r.degrees.is_some(), "plane")?;
+    }
+    if r.rolling.is_none() {
+        belongs("radius", r.radius.is_some(), "rolling")?;
+        belongs("angle", r.angle.is_some(), "rolling")?;
+    }
+    if let Some([i, j]) = r.plane {
+        if i >= N || j >= N || i == j {
+            return Err(PathError::new(
+                format!("{path}.plane"),
+                format!(
+                    "expected two different axes in 0..{} (dim = {N}), got [{i}, {j}]",
+                    N - 1
+                ),
+            ));
+        }
+        let degrees = r
+            .degrees
+            .ok_or_else(|| PathError::new(path, "plane needs degrees (the angle)"))?;
+        if !degrees.is_finite() {
+            return Err(PathError::new(format!("{path}.degrees"), "must be finite"));
+        }
+        return Ok(plane_rotation::<N>(i, j, degrees.to_radians()));
+    }
+    if let Some(qp) = &r.quaternions {
+        let qpath = format!("{path}.quaternions");
+        if N != 4 {
+            return Err(PathError::new(
+                qpath,
+                format!(
+                    "quaternions = [q, p] give a 4D rotation, but dim = {N}; use plane or rolling"
+                ),
+            ));
+        }
+        if qp.len() != 2 {
+            return Err(PathError::new(
+                qpath,
+                format!(
+                    "expected [q, p], two lists of 4 numbers, got {} lists",
+                    qp.len()
+                ),
+            ));
+        }
+        let mut pair = [[0.0; 4]; 2];
+        for (k, (v, symbol)) in qp.iter().zip(["q", "p"]).enumerate() {
+            let vpath = format!("{qpath}[{k}]");
+            if v.len() != 4 {
+                return Err(PathError::new(
+                    vpath,
+                    format!(
+                        "expected 4 numbers (a quaternion q0, q1, q2, q3), got {}",
+                        v.len()
+                    ),
+                ));
+            }
+            finite_list(v, &vpath)?;
+            if let Some(message) = unit_problem(v, "quaternion", symbol) {
+                return Err(PathError::new(vpath, message));
+            }
+            pair[k].copy_from_slice(v);
+        }
+        let m = so4_from_quaternions(&pair[0], &pair[1]);
+        // N = 4 here; copy into the generic matrix type.
+        return Ok(std::array::from_fn(|i| std::array::from_fn(|j| m[i][j])));
+    }
+    let d = r.rolling.as_deref().unwrap_or_default();
+    let rpath = format!("{path}.rolling");
+    if d.len() != N - 1 {
+        return Err(PathError::new(
+            rpath,
+            format!(
+                "expected N − 1 = {} numbers (dim = {N}), got {}",
+                N - 1,
+                d.len()
+            ),
+        ));
+    }
+    finite_list(d, &rpath)?;
+    let radius = r
+        .radius
+        .ok_or_else(|| PathError::new(path, "rolling needs radius (the ball radius R)"))?;
+    if !(radius > 0.0 && radius.is_finite()) {
+        return Err(PathError::new(
+            format!("{path}.radius"),
+            format!("must be a positive number, got {radius}"),
+        ));
+    }
+    Ok(rolling_ball::<N>(d, radius, r.angle.unwrap_or_default()))
 }
 
-/// The course's plane rotation R_ij(θ) (rotations paper, eq. 6): turns axis i toward axis j,
-/// R·e_i = cos θ·e_i + sin θ·e_j.
-pub fn plane_rotation<const N: usize>(i: usize, j: usize, theta: f64) -> Matrix<N> {
-    let mut m: Matrix<N> = identity();
-    let (s, c) = theta.sin_cos();
-    m[i][i] = c;
-    m[j][j] = c;
-    m[i][j] = -s;
-    m[j][i] = s;
-    m
+fn scale_matrix<const N: usize>(s: &[f64; N]) -> Matrix<N> {
+    std::array::from_fn(|i| std::array::from_fn(|j| if i == j { s[i] } else { 0.0 }))
 }
 
 fn affine_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<(Matrix<N>, Vector<N>)> {
@@ -739,6 +835,9 @@ pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N
             material(&o.material, &format!("{p}.material"))?,
             transform::<N>(&o.transform, &format!("{p}.transform"))?,
         ));
+    }
+    if let Some(a) = &desc.animation {
+        super::animation::check::<N>(a, desc.objects.len())?;
     }
     // 2. Meshes in world space. A transform that reverses handedness (det < 0) would turn
     //    outward normals inward (normals are pseudotensors), so such simplices are reordered to

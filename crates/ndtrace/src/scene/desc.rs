@@ -53,6 +53,10 @@ pub struct SceneDesc {
     /// How the CLI turns the retina into a picture (keyword arguments of `ndtrace.composite`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub composite: Option<CompositeDesc>,
+    /// A sequence of frames in which the objects or the camera rotate (`ndtrace.animate`,
+    /// `ndtrace --frames`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub animation: Option<AnimationDesc>,
 }
 
 /// Compositing mode of a retina.
@@ -100,6 +104,98 @@ pub struct CompositeDesc {
     /// Axis of the slices montage.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub axis: Option<u32>,
+}
+
+/// `[animation]`: frames in which a rotation — one of `sweep`, `slerp` or `rolling` — moves the
+/// target from its place in the scene. Frame k of K sits at t = k/(K−1) (t = k/K when
+/// `periodic`, so that a full turn loops without a repeated frame).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnimationDesc {
+    /// Number of frames K.
+    #[serde(default = "default_frames")]
+    pub frames: u32,
+    /// Frames per second of the GIF or MP4.
+    #[serde(default = "default_fps")]
+    pub fps: f64,
+    /// t = k/K instead of k/(K−1): the last frame does not repeat the first.
+    #[serde(default)]
+    pub periodic: bool,
+    /// What moves: `"objects"` (all), `"camera"`, or a list of object indices.
+    #[serde(default)]
+    pub target: AnimationTarget,
+    /// Centre of the rotation (default: the origin).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center: Option<Vec<f64>>,
+    /// A plane-angle sweep R_ij(θ(t)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<SweepDesc>,
+    /// An SO(4) double-quaternion slerp (dim = 4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slerp: Option<SlerpDesc>,
+    /// A rolling-ball path.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rolling: Option<RollingPathDesc>,
+}
+
+fn default_frames() -> u32 {
+    48
+}
+fn default_fps() -> f64 {
+    24.0
+}
+
+/// What an animation moves.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(
+    untagged,
+    expecting = "expected \"objects\", \"camera\" or a list of object indices"
+)]
+pub enum AnimationTarget {
+    /// `"objects"` or `"camera"`.
+    Named(String),
+    /// These objects (indices into `objects`).
+    Objects(Vec<usize>),
+}
+
+impl Default for AnimationTarget {
+    fn default() -> Self {
+        AnimationTarget::Named("objects".into())
+    }
+}
+
+/// `sweep = {plane = [i, j], degrees = [θ0, θ1]}`: R_ij with θ linear in t.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepDesc {
+    /// The rotation plane (axes from 0), turning axis i toward axis j.
+    pub plane: [usize; 2],
+    /// Angles at t = 0 and t = 1, degrees.
+    pub degrees: [f64; 2],
+}
+
+/// `slerp = {from = [q, p], to = [q, p]}`: the SO(4) rotation v ↦ q·v·p̄ with q and p slerped.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlerpDesc {
+    /// Unit quaternions (q, p) at t = 0.
+    pub from: [[f64; 4]; 2],
+    /// Unit quaternions (q, p) at t = 1.
+    pub to: [[f64; 4]; 2],
+}
+
+/// `rolling = {path = [[…], …], radius = R}`: the rolling ball driven along a polyline of
+/// controller positions (N−1 numbers each), one rolling step per path segment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RollingPathDesc {
+    /// Controller positions P_0 … P_m (at least two).
+    pub path: Vec<Vec<f64>>,
+    /// Ball radius R.
+    pub radius: f64,
+    /// How a displacement becomes an angle: `"course"` (c = R/D, s = r/D) or `"arc"` (θ = r/R).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angle: Option<crate::rotation::RollingAngle>,
 }
 
 fn default_background() -> Vec<f64> {
@@ -319,14 +415,37 @@ pub enum ScaleDesc {
     PerAxis(Vec<f64>),
 }
 
-/// A rotation.
+/// A rotation, in one of three forms (exactly one of `plane`, `quaternions`, `rolling`):
+///
+/// * `{ plane = [i, j], degrees = θ }`: the course's R_ij turning axis i toward axis j
+///   (rotations paper, eq. 6);
+/// * `{ quaternions = [q, p] }` (dim = 4): the rotation v ↦ q·v·p̄ of unit quaternions
+///   (notes, "Quaternion form in 4D");
+/// * `{ rolling = [d_1, …, d_{N−1}], radius = R, angle = "course" | "arc" }`: the rolling ball
+///   M_N (rotations paper, eq. 5) for a controller displacement d.
+///
+/// Which keys go together is checked when the scene is built, so errors name the field.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RotateDesc {
-    /// The course's R_ij turning axis i toward axis j (axes numbered from 0).
-    pub plane: [usize; 2],
-    /// Angle in degrees.
-    pub degrees: f64,
+    /// Plane form: the axes [i, j] (numbered from 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plane: Option<[usize; 2]>,
+    /// Plane form: the angle in degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub degrees: Option<f64>,
+    /// Double-quaternion form (dim = 4): [q, p], two unit quaternions [q0, q1, q2, q3].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quaternions: Option<Vec<Vec<f64>>>,
+    /// Rolling-ball form: the controller displacement, N − 1 numbers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rolling: Option<Vec<f64>>,
+    /// Rolling-ball form: the ball radius R (> 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    /// Rolling-ball form: `"course"` (c = R/D, s = r/D; the default) or `"arc"` (θ = r/R).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub angle: Option<crate::rotation::RollingAngle>,
 }
 
 /// One step of an object transform.
@@ -337,7 +456,7 @@ pub enum TransformDesc {
     Scale(ScaleDesc),
     /// Translate by a vector.
     Translate(Vec<f64>),
-    /// Rotate in a coordinate plane (rotations paper, eq. 6).
+    /// Rotate: in a coordinate plane, by a pair of quaternions (4D) or by the rolling ball.
     Rotate(RotateDesc),
     /// N×N linear or (N+1)×(N+1) affine matrix (rows).
     Matrix(Vec<Vec<f64>>),

@@ -1,0 +1,442 @@
+//! The rotation toolkit over flat, C-ordered `f64` buffers with a runtime dimension: the layer
+//! the Python bindings call (`ndtrace.rotation`). Each function checks buffer sizes and every
+//! precondition of the generic functions (unit quaternions, rotations, lengths), naming the
+//! argument and, for batches, the item in C order; then it dispatches on `dim` through
+//! [`crate::with_dim!`]. The batch size is inferred from the buffer lengths.
+
+use super::*;
+use crate::batch::{batch_len, check_len};
+use crate::with_dim;
+
+fn with_index(message: String, index: usize, batch: usize) -> String {
+    if batch > 1 {
+        format!("{message} at batch index {index}")
+    } else {
+        message
+    }
+}
+
+/// Every `width`-float item of `buf` is a unit vector ("quaternion" or "vector").
+fn unit_items(arg: &str, buf: &[f64], width: usize, what: &str) -> NdResult<()> {
+    let batch = buf.len() / width;
+    for (i, v) in buf.chunks_exact(width).enumerate() {
+        if let Some(m) = unit_problem(v, what, arg) {
+            return Err(NdError::Value {
+                arg: arg.into(),
+                message: with_index(m, i, batch),
+            });
+        }
+    }
+    Ok(())
+}
+
+fn as_vectors<const N: usize>(flat: &[f64]) -> &[Vector<N>] {
+    flat.as_chunks::<N>().0
+}
+
+fn as_matrices<const N: usize>(flat: &[f64]) -> &[Matrix<N>] {
+    flat.as_chunks::<N>().0.as_chunks::<N>().0
+}
+
+fn as_matrices_mut<const N: usize>(flat: &mut [f64]) -> &mut [Matrix<N>] {
+    flat.as_chunks_mut::<N>().0.as_chunks_mut::<N>().0
+}
+
+fn as_quats(flat: &[f64]) -> &[Quat] {
+    flat.as_chunks::<4>().0
+}
+
+/// Every matrix of `mats` is a rotation.
+fn rotation_items<const N: usize>(arg: &str, mats: &[Matrix<N>]) -> NdResult<()> {
+    for (i, m) in mats.iter().enumerate() {
+        if let Some(message) = rotation_problem(m) {
+            return Err(NdError::Value {
+                arg: arg.into(),
+                message: with_index(message, i, mats.len()),
+            });
+        }
+    }
+    Ok(())
+}
+
+fn finite(arg: &str, buf: &[f64]) -> NdResult<()> {
+    match buf.iter().position(|x| !x.is_finite()) {
+        Some(index) => Err(NdError::NonFinite {
+            arg: arg.into(),
+            index,
+            value: buf[index],
+        }),
+        None => Ok(()),
+    }
+}
+
+/// [`plane_rotation`]`(i, j, θ)` for every θ of `thetas` (radians) → `(T, N, N)`.
+pub fn plane_rotation(
+    dim: usize,
+    i: usize,
+    j: usize,
+    thetas: &[f64],
+    out: &mut [f64],
+) -> NdResult<()> {
+    if i >= dim || j >= dim || i == j {
+        return Err(NdError::Value {
+            arg: "i, j".into(),
+            message: format!(
+                "expected two different axes in 0..{} (n = {dim}), got ({i}, {j})",
+                dim.saturating_sub(1)
+            ),
+        });
+    }
+    finite("theta", thetas)?;
+    with_dim!(dim, N => {
+        check_len("out", out, N * N, thetas.len(), "(N, N)")?;
+        for (o, &t) in as_matrices_mut::<N>(out).iter_mut().zip(thetas) {
+            *o = super::plane_rotation::<N>(i, j, t);
+        }
+        Ok(())
+    })?
+}
+
+/// [`compose`] of `(B, K, N, N)` rotations → `(B, N, N)` (B from `out`); each input must be a
+/// rotation.
+pub fn compose(dim: usize, k: usize, rotations: &[f64], out: &mut [f64]) -> NdResult<()> {
+    with_dim!(dim, N => {
+        let b = out.len() / (N * N);
+        check_len("out", out, N * N, b, "(N, N)")?;
+        check_len("rotations", rotations, k * N * N, b, "(K, N, N)")?;
+        let mats = as_matrices::<N>(rotations);
+        rotation_items("rotations", mats)?;
+        for (idx, o) in as_matrices_mut::<N>(out).iter_mut().enumerate() {
+            *o = super::compose(&mats[idx * k..(idx + 1) * k]);
+        }
+        Ok(())
+    })?
+}
+
+/// [`rolling_ball`] of displacements `(B, N−1)` → `(B, N, N)`.
+pub fn rolling_ball(
+    dim: usize,
+    displacement: &[f64],
+    radius: f64,
+    angle: RollingAngle,
+    out: &mut [f64],
+) -> NdResult<()> {
+    if !(radius > 0.0 && radius.is_finite()) {
+        return Err(NdError::Value {
+            arg: "radius".into(),
+            message: format!("must be a positive number, got {radius}"),
+        });
+    }
+    finite("displacement", displacement)?;
+    with_dim!(dim, N => {
+        let b = batch_len("displacement", displacement, N - 1, "(N−1,)")?;
+        check_len("out", out, N * N, b, "(N, N)")?;
+        for (o, d) in as_matrices_mut::<N>(out).iter_mut().zip(displacement.chunks_exact(N - 1)) {
+            *o = super::rolling_ball::<N>(d, radius, angle);
+        }
+        Ok(())
+    })?
+}
+
+/// [`frame`] of `(B, K, N)` vectors → `(B, N, N)` (B from `out`).
+pub fn frame(dim: usize, k: usize, vectors: &[f64], out: &mut [f64]) -> NdResult<()> {
+    with_dim!(dim, N => {
+        if k > N {
+            return Err(NdError::Shape {
+                arg: "vectors".into(),
+                expected: format!("(..., K, {N}) with K ≤ {N}"),
+                got: format!("K = {k}"),
+            });
+        }
+        let b = out.len() / (N * N);
+        check_len("vectors", vectors, k * N, b, "(K, N)")?;
+        check_len("out", out, N * N, b, "(N, N)")?;
+        let vs = as_vectors::<N>(vectors);
+        for (idx, o) in as_matrices_mut::<N>(out).iter_mut().enumerate() {
+            *o = super::frame(&vs[idx * k..(idx + 1) * k]).map_err(|e| match e {
+                NdError::Value { arg, message } => NdError::Value {
+                    arg,
+                    message: with_index(message, idx, b),
+                },
+                other => other,
+            })?;
+        }
+        Ok(())
+    })?
+}
+
+/// [`look_at`]: position, target `(N,)`, up `(N−2, N)` → `(N, N)`.
+pub fn look_at(
+    dim: usize,
+    position: &[f64],
+    target: &[f64],
+    up: &[f64],
+    out: &mut [f64],
+) -> NdResult<()> {
+    finite("position", position)?;
+    finite("target", target)?;
+    finite("up", up)?;
+    with_dim!(dim, N => {
+        check_len("position", position, N, 1, "(N,)")?;
+        check_len("target", target, N, 1, "(N,)")?;
+        check_len("up", up, N, N - 2, "(N,)")?;
+        check_len("out", out, N * N, 1, "(N, N)")?;
+        let m = super::look_at::<N>(&as_vectors(position)[0], &as_vectors(target)[0], as_vectors(up))?;
+        as_matrices_mut::<N>(out)[0] = m;
+        Ok(())
+    })?
+}
+
+/// [`slerp`] between unit vectors `a`, `b` `(B, N)` at every t of `ts` → `(T, B, N)`.
+pub fn slerp(dim: usize, a: &[f64], b: &[f64], ts: &[f64], out: &mut [f64]) -> NdResult<()> {
+    finite("t", ts)?;
+    with_dim!(dim, N => {
+        let n = batch_len("a", a, N, "(N,)")?;
+        check_len("b", b, N, n, "(N,)")?;
+        check_len("out", out, N, n * ts.len(), "(N,)")?;
+        unit_items("a", a, N, "vector")?;
+        unit_items("b", b, N, "vector")?;
+        let (av, bv) = (as_vectors::<N>(a), as_vectors::<N>(b));
+        for (o, idx) in out.chunks_exact_mut(N).zip(0..) {
+            let (ti, bi) = (idx / n, idx % n);
+            o.copy_from_slice(&super::slerp(&av[bi], &bv[bi], ts[ti]));
+        }
+        Ok(())
+    })?
+}
+
+/// [`to_nested_spheres`] of rotations `(B, N, N)` → `(B, N(N+1)/2 − 1)`: per item the vectors
+/// v_N, v_{N−1}, …, v_2 one after the other.
+pub fn to_nested_spheres(dim: usize, rotations: &[f64], out: &mut [f64]) -> NdResult<()> {
+    with_dim!(dim, N => {
+        let b = batch_len("R", rotations, N * N, "(N, N)")?;
+        let w = nested_sphere_floats(N);
+        check_len("out", out, w, b, "(N(N+1)/2 − 1,)")?;
+        let mats = as_matrices::<N>(rotations);
+        rotation_items("R", mats)?;
+        for (o, m) in out.chunks_exact_mut(w).zip(mats) {
+            let flat: Vec<f64> = super::to_nested_spheres(m).concat();
+            o.copy_from_slice(&flat);
+        }
+        Ok(())
+    })?
+}
+
+/// [`from_nested_spheres`] of packed vectors `(B, N(N+1)/2 − 1)` → `(B, N, N)`.
+pub fn from_nested_spheres(dim: usize, packed: &[f64], out: &mut [f64]) -> NdResult<()> {
+    with_dim!(dim, N => {
+        let w = nested_sphere_floats(N);
+        let b = batch_len("vectors", packed, w, "(N(N+1)/2 − 1,)")?;
+        check_len("out", out, N * N, b, "(N, N)")?;
+        finite("vectors", packed)?;
+        for (idx, (o, p)) in as_matrices_mut::<N>(out).iter_mut().zip(packed.chunks_exact(w)).enumerate() {
+            let mut vs = Vec::with_capacity(N - 1);
+            let mut at = 0;
+            for k in (2..=N).rev() {
+                vs.push(p[at..at + k].to_vec());
+                at += k;
+            }
+            *o = super::from_nested_spheres::<N>(&vs).map_err(|e| match e {
+                NdError::Value { arg, message } => NdError::Value {
+                    arg,
+                    message: with_index(message, idx, b),
+                },
+                other => other,
+            })?;
+        }
+        Ok(())
+    })?
+}
+
+/// [`nested_slerp`] between rotations `r0`, `r1` `(N, N)` at every t of `ts` → `(T, N, N)`.
+pub fn nested_slerp(
+    dim: usize,
+    r0: &[f64],
+    r1: &[f64],
+    ts: &[f64],
+    out: &mut [f64],
+) -> NdResult<()> {
+    finite("t", ts)?;
+    with_dim!(dim, N => {
+        check_len("R0", r0, N * N, 1, "(N, N)")?;
+        check_len("R1", r1, N * N, 1, "(N, N)")?;
+        check_len("out", out, N * N, ts.len(), "(N, N)")?;
+        let (a, b) = (as_matrices::<N>(r0), as_matrices::<N>(r1));
+        rotation_items("R0", a)?;
+        rotation_items("R1", b)?;
+        for (o, &t) in as_matrices_mut::<N>(out).iter_mut().zip(ts) {
+            *o = super::nested_slerp(&a[0], &b[0], t);
+        }
+        Ok(())
+    })?
+}
+
+/// [`quat_mul`] of `(B, 4)` by `(B, 4)` (any quaternions).
+pub fn quat_multiply(a: &[f64], b: &[f64], out: &mut [f64]) -> NdResult<()> {
+    let n = batch_len("a", a, 4, "(4,)")?;
+    check_len("b", b, 4, n, "(4,)")?;
+    check_len("out", out, 4, n, "(4,)")?;
+    for ((o, x), y) in out.chunks_exact_mut(4).zip(as_quats(a)).zip(as_quats(b)) {
+        o.copy_from_slice(&quat_mul(x, y));
+    }
+    Ok(())
+}
+
+/// [`quat_conjugate`] of `(B, 4)`.
+pub fn quat_conjugate(q: &[f64], out: &mut [f64]) -> NdResult<()> {
+    let n = batch_len("q", q, 4, "(4,)")?;
+    check_len("out", out, 4, n, "(4,)")?;
+    for (o, x) in out.chunks_exact_mut(4).zip(as_quats(q)) {
+        o.copy_from_slice(&super::quat_conjugate(x));
+    }
+    Ok(())
+}
+
+/// [`quat_to_matrix`] of unit quaternions `(B, 4)` → `(B, 3, 3)`.
+pub fn quat_to_matrix(q: &[f64], out: &mut [f64]) -> NdResult<()> {
+    let n = batch_len("q", q, 4, "(4,)")?;
+    check_len("out", out, 9, n, "(3, 3)")?;
+    unit_items("q", q, 4, "quaternion")?;
+    for (o, x) in as_matrices_mut::<3>(out).iter_mut().zip(as_quats(q)) {
+        *o = super::quat_to_matrix(x);
+    }
+    Ok(())
+}
+
+/// [`matrix_to_quat`] of rotations `(B, 3, 3)` → `(B, 4)`; with `stride > 0` the signs are then
+/// made continuous along tracks of that stride ([`continuous_signs`]).
+pub fn matrix_to_quat(m: &[f64], stride: usize, out: &mut [f64]) -> NdResult<()> {
+    let n = batch_len("R", m, 9, "(3, 3)")?;
+    check_len("out", out, 4, n, "(4,)")?;
+    let mats = as_matrices::<3>(m);
+    rotation_items("R", mats)?;
+    let mut qs: Vec<Quat> = mats.iter().map(super::matrix_to_quat).collect();
+    if stride > 0 {
+        continuous_signs(&mut qs, stride);
+    }
+    out.copy_from_slice(qs.as_flattened());
+    Ok(())
+}
+
+/// [`so4_from_quaternions`] of unit `q`, `p` `(B, 4)` → `(B, 4, 4)`.
+pub fn so4_from_quaternions(q: &[f64], p: &[f64], out: &mut [f64]) -> NdResult<()> {
+    let n = batch_len("q", q, 4, "(4,)")?;
+    check_len("p", p, 4, n, "(4,)")?;
+    check_len("out", out, 16, n, "(4, 4)")?;
+    unit_items("q", q, 4, "quaternion")?;
+    unit_items("p", p, 4, "quaternion")?;
+    for ((o, x), y) in as_matrices_mut::<4>(out)
+        .iter_mut()
+        .zip(as_quats(q))
+        .zip(as_quats(p))
+    {
+        *o = super::so4_from_quaternions(x, y);
+    }
+    Ok(())
+}
+
+/// [`quaternions_from_so4`] of rotations `(B, 4, 4)` → `(B, 8)` packed as `[q…, p…]`.
+pub fn quaternions_from_so4(m: &[f64], out: &mut [f64]) -> NdResult<()> {
+    let n = batch_len("R", m, 16, "(4, 4)")?;
+    check_len("out", out, 8, n, "(8,)")?;
+    let mats = as_matrices::<4>(m);
+    rotation_items("R", mats)?;
+    for (o, x) in out.chunks_exact_mut(8).zip(mats) {
+        let (q, p) = super::quaternions_from_so4(x);
+        o[..4].copy_from_slice(&q);
+        o[4..].copy_from_slice(&p);
+    }
+    Ok(())
+}
+
+/// [`slerp_so4`] from unit `(q0, p0)` to `(q1, p1)` (each `(4,)`) at every t → `(T, 8)` packed as
+/// `[q…, p…]`.
+pub fn slerp_so4(
+    q0: &[f64],
+    p0: &[f64],
+    q1: &[f64],
+    p1: &[f64],
+    ts: &[f64],
+    out: &mut [f64],
+) -> NdResult<()> {
+    finite("t", ts)?;
+    for (arg, v) in [("q0", q0), ("p0", p0), ("q1", q1), ("p1", p1)] {
+        check_len(arg, v, 4, 1, "(4,)")?;
+        unit_items(arg, v, 4, "quaternion")?;
+    }
+    check_len("out", out, 8, ts.len(), "(8,)")?;
+    let g = |v: &[f64]| -> Quat { std::array::from_fn(|i| v[i]) };
+    let (q0, p0, q1, p1) = (g(q0), g(p0), g(q1), g(p1));
+    for (o, &t) in out.chunks_exact_mut(8).zip(ts) {
+        let (q, p) = super::slerp_so4((&q0, &p0), (&q1, &p1), t);
+        o[..4].copy_from_slice(&q);
+        o[4..].copy_from_slice(&p);
+    }
+    Ok(())
+}
+
+/// [`arcball_4d`] of unit quaternions `(B, 4)` each → `(B, 4, 4)`.
+pub fn arcball_4d(a0: &[f64], a1: &[f64], b0: &[f64], b1: &[f64], out: &mut [f64]) -> NdResult<()> {
+    let n = batch_len("a0", a0, 4, "(4,)")?;
+    for (arg, v) in [("a0", a0), ("a1", a1), ("b0", b0), ("b1", b1)] {
+        check_len(arg, v, 4, n, "(4,)")?;
+        unit_items(arg, v, 4, "quaternion")?;
+    }
+    check_len("out", out, 16, n, "(4, 4)")?;
+    let (a0, a1, b0, b1) = (as_quats(a0), as_quats(a1), as_quats(b0), as_quats(b1));
+    for (i, o) in as_matrices_mut::<4>(out).iter_mut().enumerate() {
+        *o = super::arcball_4d(&a0[i], &a1[i], &b0[i], &b1[i]);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn batch_errors_name_argument_and_item() {
+        let mut out = vec![0.0; 32];
+        let q = [1.0, 0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0];
+        let e = quat_to_matrix(&q, &mut out[..18]).unwrap_err().to_string();
+        assert_eq!(e, "q: not a unit quaternion (|q| = 2) at batch index 1");
+        let e = so4_from_quaternions(&q[..4], &q[4..], &mut out[..16])
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "p: not a unit quaternion (|p| = 2)");
+        let e = rolling_ball(3, &[1.0, 2.0, 3.0], 1.0, RollingAngle::Arc, &mut out[..9])
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("displacement: expected shape"), "{e}");
+        let e = rolling_ball(3, &[1.0, 2.0], 0.0, RollingAngle::Arc, &mut out[..9])
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "radius: must be a positive number, got 0");
+        let e = plane_rotation(3, 1, 1, &[0.0], &mut out[..9])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("two different axes"), "{e}");
+        let bad = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0];
+        let e = matrix_to_quat(&bad, 0, &mut out[..4])
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("R: is a reflection"), "{e}");
+    }
+
+    #[test]
+    fn continuity_runs_along_the_stride() {
+        // Two interleaved tracks; each item is the canonical quaternion, flipped as needed.
+        let rot = |th: f64| super::super::plane_rotation::<3>(0, 1, th);
+        let ms: Vec<Matrix<3>> = [3.0, 0.1, 3.3, 0.2].iter().map(|&t| rot(t)).collect();
+        let flat: Vec<f64> = ms.iter().flat_map(|m| m.as_flattened().to_vec()).collect();
+        let mut out = vec![0.0; 16];
+        matrix_to_quat(&flat, 2, &mut out).unwrap();
+        let q: Vec<&[f64]> = out.chunks(4).collect();
+        let d = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        assert!(d(q[0], q[2]) > 0.9 && d(q[1], q[3]) > 0.9);
+        // Without continuity, angle 3.3 > π comes back with q0 ≥ 0, opposite to angle 3.0's.
+        matrix_to_quat(&flat, 0, &mut out).unwrap();
+        let q: Vec<&[f64]> = out.chunks(4).collect();
+        assert!(d(q[0], q[2]) < 0.0);
+    }
+}
