@@ -9,6 +9,9 @@
 //! distort. Also prints a hash of the retina, so that a change can be checked to leave every
 //! bit of the output unchanged. `perf record` on this binary shows where the time goes.
 //!
+//! With `--features traversal-stats` it also prints the BVH nodes and leaves visited per cell
+//! (primary and shadow rays together); the tree's size and depth are always printed.
+//!
 //! `… --example trace_speed -- SCENE.toml orders` instead times closest-hit queries alone
 //! (one thread, no shading or shadow rays) for the rays through the cell centres taken in
 //! image order, all equal to one ray (everything cached: the arithmetic and latency floor),
@@ -108,6 +111,13 @@ fn main() {
     let t0 = Instant::now();
     let (_, scene) = load_file(Path::new(path)).expect("scene");
     let build = t0.elapsed().as_secs_f64();
+    with_scene!(&scene, s, _N => println!(
+        "tree: {} simplices, {} nodes, {} leaves, depth {}",
+        s.bvh.len(),
+        s.bvh.node_count(),
+        s.bvh.leaf_count(),
+        s.bvh.depth()
+    ));
     if args.get(2).map(String::as_str) == Some("orders") {
         with_scene!(&scene, s, N => orders::<N>(s));
         return;
@@ -136,6 +146,16 @@ fn main() {
         cpu = cpu.min(c);
         hash = retina_hash(&r);
         cells = r.depth.len();
+    }
+    #[cfg(feature = "traversal-stats")]
+    {
+        let [nodes, leaves] = ndtrace::accel::traversal_stats();
+        let rays = (repeats * cells) as f64;
+        println!(
+            "per retina cell: {:.2} nodes, {:.2} leaves visited (all rays)",
+            nodes as f64 / rays,
+            leaves as f64 / rays
+        );
     }
     println!(
         "{path}: build {build:.3} s, {cells} cells, {threads} thread(s): {:.2} Mrays/s wall, \
