@@ -96,6 +96,30 @@ const LEAF: u32 = 1 << 31;
 /// An unused child slot (its box is empty, so it is never entered).
 const EMPTY: u32 = u32::MAX;
 
+/// Traversal counters (feature `traversal-stats`; no-ops without it).
+mod stats {
+    #[cfg(feature = "traversal-stats")]
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    /// Inner nodes slab-tested, leaf blocks tested.
+    #[cfg(feature = "traversal-stats")]
+    pub static VISITS: [AtomicU64; 2] = [AtomicU64::new(0), AtomicU64::new(0)];
+
+    /// Counts one visit of kind `k` (0: node, 1: leaf).
+    #[inline(always)]
+    pub fn count(_k: usize) {
+        #[cfg(feature = "traversal-stats")]
+        VISITS[_k].fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+/// Inner nodes and leaf blocks visited by all traversals so far (feature `traversal-stats`).
+#[cfg(feature = "traversal-stats")]
+pub fn traversal_stats() -> [u64; 2] {
+    use std::sync::atomic::Ordering;
+    stats::VISITS.each_ref().map(|v| v.load(Ordering::Relaxed))
+}
+
 /// A ray `X(t) = origin + t·dir`; `dir` need not be unit, so t is in units of `|dir|`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ray<const N: usize> {
@@ -1473,6 +1497,7 @@ impl<const N: usize> Bvh<N> {
         tmin: f64,
         tmax: f64,
     ) -> BlockHits<N> {
+        stats::count(1);
         #[cfg(target_arch = "x86_64")]
         if AVX {
             // SAFETY: `AVX` is only true in code running after an AVX2 check.
@@ -1513,6 +1538,7 @@ impl<const N: usize> Bvh<N> {
         sp: &mut usize,
     ) -> u32 {
         let nd = &self.nodes[cur as usize];
+        stats::count(0);
         let (mask, tn) = self.slab::<AVX>(pre, nd, lo, hi);
         if mask == 0 {
             return EMPTY;

@@ -1,0 +1,166 @@
+//! Whole-tracer speed (camera rays, BVH, shading, shadow rays, retina writes) on one scene file,
+//! and how much of the closest-hit cost is memory rather than arithmetic.
+//!
+//! `cargo run --release -p ndtrace --example trace_speed -- SCENE.toml [REPEATS] [THREADS]`
+//!
+//! Traces the scene `REPEATS` times (default 5) on a pool of `THREADS` rayon workers (default
+//! one) and prints the best wall-clock and, with one thread, the best thread-CPU rate in rays
+//! (retina cells) per second: CPU time is what other processes competing for the cores do not
+//! distort. Also prints a hash of the retina, so that a change can be checked to leave every
+//! bit of the output unchanged. `perf record` on this binary shows where the time goes.
+//!
+//! With `--features traversal-stats` it also prints the BVH nodes and leaves visited per cell
+//! (primary and shadow rays together); the tree's size and depth are always printed.
+//!
+//! `… --example trace_speed -- SCENE.toml orders` instead times closest-hit queries alone
+//! (one thread, no shading or shadow rays) for the rays through the cell centres taken in
+//! image order, all equal to one ray (everything cached: the arithmetic and latency floor),
+//! in random order (cache-hostile), and for a ray that misses the root box (the fixed cost of
+//! a query).
+
+use ndtrace::accel::Ray;
+use ndtrace::render::{trace, Progress, Retina};
+use ndtrace::scene::{load_file, Scene};
+use ndtrace::with_scene;
+use std::hash::{Hash, Hasher};
+use std::path::Path;
+use std::time::Instant;
+
+/// CPU time of the calling thread in seconds (Linux: /proc/thread-self/schedstat).
+fn thread_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: u64 = s.split_whitespace().next()?.parse().ok()?;
+    Some(ns as f64 * 1e-9)
+}
+
+/// A hash of every output array of the retina, bit for bit.
+fn retina_hash(r: &Retina) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    r.rgba.iter().for_each(|v| v.to_bits().hash(&mut h));
+    r.depth.iter().for_each(|v| v.to_bits().hash(&mut h));
+    r.normal.iter().for_each(|v| v.to_bits().hash(&mut h));
+    r.object_id.hash(&mut h);
+    r.primitive_id.hash(&mut h);
+    h.finish()
+}
+
+/// Closest-hit rates for the same rays in different orders (see the module docs).
+fn orders<const N: usize>(scene: &Scene<N>) {
+    let cam = &scene.camera;
+    let n = cam.cell_count();
+    let centre = vec![0.5; N - 1];
+    let mut rays: Vec<Ray<N>> = (0..n)
+        .map(|c| {
+            let mut u = [0.0; N];
+            cam.retina_point(c, &centre, &mut u);
+            cam.ray(&u[..N - 1])
+        })
+        .collect();
+    let mut away = rays[0];
+    away.dir = away.dir.map(|x| -x);
+    rays.push(away);
+    // A fixed-seed Fisher–Yates shuffle (an LCG), so that runs are comparable.
+    let mut random: Vec<usize> = (0..n).collect();
+    let mut state = 12345u64;
+    for i in (1..n).rev() {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        random.swap(i, (state >> 33) as usize % (i + 1));
+    }
+    // The cell at the middle of every retina axis.
+    let (mut middle, mut stride) = (0, 1);
+    for &r in &cam.resolution {
+        middle += r / 2 * stride;
+        stride *= r;
+    }
+    let runs = [
+        ("image order", (0..n).collect::<Vec<_>>()),
+        ("one ray", vec![middle; n]),
+        ("random order", random),
+        ("miss", vec![n; n]),
+    ];
+    for (name, order) in runs {
+        let mut best = f64::INFINITY;
+        let mut hits = 0;
+        for _ in 0..3 {
+            let c0 = thread_seconds().unwrap_or(f64::NAN);
+            hits = order
+                .iter()
+                .filter(|&&i| {
+                    let hit = scene
+                        .bvh
+                        .closest_hit(&rays[i], 0.0, f64::INFINITY, |_| true);
+                    hit.is_some()
+                })
+                .count();
+            best = best.min(thread_seconds().unwrap_or(f64::NAN) - c0);
+        }
+        println!(
+            "{name:>12}: {hits} hits of {n}, {:.2} M closest-hit queries/s CPU",
+            n as f64 / best / 1e6
+        );
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let path = args
+        .get(1)
+        .expect("usage: trace_speed SCENE.toml [REPEATS [THREADS] | orders]");
+    let t0 = Instant::now();
+    let (_, scene) = load_file(Path::new(path)).expect("scene");
+    let build = t0.elapsed().as_secs_f64();
+    with_scene!(&scene, s, _N => println!(
+        "tree: {} simplices, {} nodes, {} leaves, depth {}",
+        s.bvh.len(),
+        s.bvh.node_count(),
+        s.bvh.leaf_count(),
+        s.bvh.depth()
+    ));
+    if args.get(2).map(String::as_str) == Some("orders") {
+        with_scene!(&scene, s, N => orders::<N>(s));
+        return;
+    }
+    let repeats: usize = args.get(2).map_or(5, |s| s.parse().expect("REPEATS"));
+    let threads: usize = args.get(3).map_or(1, |s| s.parse().expect("THREADS"));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("pool");
+    let (mut wall, mut cpu, mut hash, mut cells) = (f64::INFINITY, f64::INFINITY, 0, 0);
+    for _ in 0..repeats {
+        let (w, c, r) = pool.install(|| {
+            let c0 = thread_seconds();
+            let t = Instant::now();
+            let r =
+                with_scene!(&scene, s, N => trace::<N>(s, &Progress::default())).expect("trace");
+            let w = t.elapsed().as_secs_f64();
+            let c = match (c0, thread_seconds()) {
+                (Some(a), Some(b)) if threads == 1 => b - a,
+                _ => f64::NAN,
+            };
+            (w, c, r)
+        });
+        wall = wall.min(w);
+        cpu = cpu.min(c);
+        hash = retina_hash(&r);
+        cells = r.depth.len();
+    }
+    #[cfg(feature = "traversal-stats")]
+    {
+        let [nodes, leaves] = ndtrace::accel::traversal_stats();
+        let rays = (repeats * cells) as f64;
+        println!(
+            "per retina cell: {:.2} nodes, {:.2} leaves visited (all rays)",
+            nodes as f64 / rays,
+            leaves as f64 / rays
+        );
+    }
+    println!(
+        "{path}: build {build:.3} s, {cells} cells, {threads} thread(s): {:.2} Mrays/s wall, \
+         {:.2} Mrays/s CPU, retina hash {hash:016x}",
+        cells as f64 / wall / 1e6,
+        cells as f64 / cpu / 1e6
+    );
+}
