@@ -9,14 +9,17 @@
 //! distort. Also prints a hash of the retina, so that a change can be checked to leave every
 //! bit of the output unchanged. `perf record` on this binary shows where the time goes.
 //!
-//! With `--features traversal-stats` it also prints the BVH nodes and leaves visited per cell
-//! (primary and shadow rays together); the tree's size and depth are always printed.
+//! With `--features traversal-stats` it also prints, per cell (primary and shadow rays
+//! together), the node visits (one per packet), the per-ray node box tests and the per-ray leaf
+//! tests; the tree's size and depth are always printed.
 //!
 //! `… --example trace_speed -- SCENE.toml orders` instead times closest-hit queries alone
 //! (one thread, no shading or shadow rays) for the rays through the cell centres taken in
 //! image order, all equal to one ray (everything cached: the arithmetic and latency floor),
 //! in random order (cache-hostile), and for a ray that misses the root box (the fixed cost of
-//! a query).
+//! a query), one ray per call; then the image-order rays as packets of 8 (as the tracer sends
+//! them), one packet over and over, and the shadow rays from their hits toward the first light
+//! one by one and as packets.
 
 use ndtrace::accel::Ray;
 use ndtrace::render::{trace, Progress, Retina};
@@ -101,6 +104,93 @@ fn orders<const N: usize>(scene: &Scene<N>) {
             n as f64 / best / 1e6
         );
     }
+    // The same rays in image order as packets, then shadow rays from their hits toward the
+    // first light (a point light's position, or far along a directional light's direction).
+    rays.truncate(n);
+    let mut out = vec![None; n];
+    let mut best = f64::INFINITY;
+    for _ in 0..3 {
+        let c0 = thread_seconds().unwrap_or(f64::NAN);
+        scene
+            .bvh
+            .closest_hits(&rays, 0.0, f64::INFINITY, |_| true, &mut out);
+        best = best.min(thread_seconds().unwrap_or(f64::NAN) - c0);
+    }
+    let hits = out.iter().filter(|h| h.is_some()).count();
+    println!(
+        "{:>12}: {hits} hits of {n}, {:.2} M closest-hit queries/s CPU",
+        "packets",
+        n as f64 / best / 1e6
+    );
+    // One packet (the 8 cells from the middle along u_1), over and over: everything cached.
+    let same: Vec<Ray<N>> = (0..n).map(|i| rays[middle + i % 8]).collect();
+    let mut best = f64::INFINITY;
+    for _ in 0..3 {
+        let c0 = thread_seconds().unwrap_or(f64::NAN);
+        scene
+            .bvh
+            .closest_hits(&same, 0.0, f64::INFINITY, |_| true, &mut out);
+        best = best.min(thread_seconds().unwrap_or(f64::NAN) - c0);
+    }
+    let hits = out.iter().filter(|h| h.is_some()).count();
+    println!(
+        "{:>12}: {hits} hits of {n}, {:.2} M closest-hit queries/s CPU",
+        "one packet",
+        n as f64 / best / 1e6
+    );
+    let Some(light) = scene.lights.first() else {
+        return;
+    };
+    scene
+        .bvh
+        .closest_hits(&rays, 0.0, f64::INFINITY, |_| true, &mut out);
+    let (mut shadow, mut tmax) = (vec![], vec![]);
+    for (ray, hit) in rays.iter().zip(&out) {
+        let Some(hit) = hit else { continue };
+        let x = ray.at(hit.t);
+        let to = match light {
+            ndtrace::scene::Light::Point { position, .. } => *position,
+            ndtrace::scene::Light::Directional { direction, .. } => {
+                std::array::from_fn(|i| x[i] + 1e3 * direction[i])
+            }
+        };
+        let d: [f64; N] = std::array::from_fn(|i| to[i] - x[i]);
+        let len = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let n = scene.flat_normals[hit.prim as usize];
+        let side = if (0..N).map(|i| n[i] * d[i]).sum::<f64>() >= 0.0 {
+            1e-7
+        } else {
+            -1e-7
+        };
+        shadow.push(Ray {
+            origin: std::array::from_fn(|i| x[i] + side * n[i]),
+            dir: d.map(|v| v / len),
+        });
+        tmax.push(len - 1e-7);
+    }
+    let mut blocked = vec![false; shadow.len()];
+    for (name, packets) in [("shadow rays", false), ("shadow packets", true)] {
+        let mut best = f64::INFINITY;
+        for _ in 0..3 {
+            let c0 = thread_seconds().unwrap_or(f64::NAN);
+            if packets {
+                scene
+                    .bvh
+                    .any_hits(&shadow, 0.0, &tmax, |_| true, &mut blocked);
+            } else {
+                for (i, r) in shadow.iter().enumerate() {
+                    blocked[i] = scene.bvh.any_hit(r, 0.0, tmax[i], |_| true);
+                }
+            }
+            best = best.min(thread_seconds().unwrap_or(f64::NAN) - c0);
+        }
+        let count = blocked.iter().filter(|&&b| b).count();
+        println!(
+            "{name:>12}: {count} blocked of {}, {:.2} M any-hit queries/s CPU",
+            shadow.len(),
+            shadow.len() as f64 / best / 1e6
+        );
+    }
 }
 
 fn main() {
@@ -149,11 +239,13 @@ fn main() {
     }
     #[cfg(feature = "traversal-stats")]
     {
-        let [nodes, leaves] = ndtrace::accel::traversal_stats();
+        let [nodes, leaves, slabs] = ndtrace::accel::traversal_stats();
         let rays = (repeats * cells) as f64;
         println!(
-            "per retina cell: {:.2} nodes, {:.2} leaves visited (all rays)",
+            "per retina cell: {:.2} node visits (per packet), {:.2} node slab tests and {:.2} \
+             leaf tests (per ray)",
             nodes as f64 / rays,
+            slabs as f64 / rays,
             leaves as f64 / rays
         );
     }

@@ -37,6 +37,16 @@
 //! Traversal is nearest-first (the children met are visited in order of entry distance, and
 //! subtrees whose entry lies beyond the current best hit are skipped) with an explicit
 //! fixed-size stack and no heap allocation; [`Bvh::any_hit`] stops at the first accepted hit.
+//!
+//! Rays travel in packets of up to [`PACKET`] ([`Bvh::closest_hits`], [`Bvh::any_hits`]; the
+//! one-ray calls are packets of one): a node is fetched once for the packet, each stack entry
+//! carries the bit set of the rays that met its box, and every ray keeps its own best hit and
+//! culling limit. When the rays share the sign of their direction on every axis (camera rays
+//! through neighbouring cells, shadow rays toward one light), one conservative *frustum* test
+//! of interval bounds stands in for the per-ray box tests of nodes whose children met are all
+//! inner nodes; each ray is tested on its own against the boxes of leaves. Since the leaf tests
+//! are exact and box tests only ever over-approximate, every ray's result is the one it gets
+//! alone — the minimum of (t, id) over its accepted hits — whichever rays it travels with.
 //! The build is parallel (rayon) for large inputs and produces the same tree for any number of
 //! threads.
 
@@ -63,6 +73,13 @@ pub const BARY_SLACK: f64 = 1e-9;
 
 /// Leaves hold at most this many simplices: the lanes of a block.
 pub const MAX_LEAF: usize = W;
+/// Rays traced together by [`Bvh::closest_hits`] and [`Bvh::any_hits`]: one bit each in the
+/// ray masks of the traversal, transposed with the children's masks as an 8×8 bit matrix.
+pub const PACKET: usize = 8;
+const _: () = assert!(
+    PACKET == 8 && NW == 8,
+    "transpose8 needs 8 rays × 8 children"
+);
 /// Lanes of a block (simplices tested together).
 const W: usize = 4;
 /// Children of a node (boxes tested together).
@@ -101,11 +118,12 @@ mod stats {
     #[cfg(feature = "traversal-stats")]
     use std::sync::atomic::{AtomicU64, Ordering};
 
-    /// Inner nodes slab-tested, leaf blocks tested.
+    /// Inner nodes visited (once per packet), leaf blocks tested (per ray), node slab tests
+    /// (per ray).
     #[cfg(feature = "traversal-stats")]
-    pub static VISITS: [AtomicU64; 2] = [AtomicU64::new(0), AtomicU64::new(0)];
+    pub static VISITS: [AtomicU64; 3] = [AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0)];
 
-    /// Counts one visit of kind `k` (0: node, 1: leaf).
+    /// Counts one visit of kind `k` (0: node, 1: leaf, 2: node slab test).
     #[inline(always)]
     pub fn count(_k: usize) {
         #[cfg(feature = "traversal-stats")]
@@ -115,7 +133,7 @@ mod stats {
 
 /// Inner nodes and leaf blocks visited by all traversals so far (feature `traversal-stats`).
 #[cfg(feature = "traversal-stats")]
-pub fn traversal_stats() -> [u64; 2] {
+pub fn traversal_stats() -> [u64; 3] {
     use std::sync::atomic::Ordering;
     stats::VISITS.each_ref().map(|v| v.load(Ordering::Relaxed))
 }
@@ -411,18 +429,18 @@ fn pad_down(t: f64) -> f64 {
     t - t.abs() * T_PAD
 }
 
-/// Per-ray data of a traversal: the simplex-test data plus the `f32` slab-test data (the slab
-/// data splatted over the lanes of a node).
+/// Per-ray data of a traversal: the simplex-test data plus the `f32` slab-test data.
+#[derive(Clone, Copy)]
 struct RayPre<const N: usize> {
     local: RayLocal<N>,
     /// 1 when the ray enters slab i through its max side (`d_i` negative, including −0), else 0.
     near: [usize; N],
     /// `1/d_i` in f32 (±∞ for a ±0 or tiny component).
-    inv: [[f32; NW]; N],
+    inv: [f32; N],
     /// Origin moved and rounded to f32 towards the side that makes the near parameter smaller…
-    o_near: [[f32; NW]; N],
+    o_near: [f32; N],
     /// …and the far parameter larger.
-    o_far: [[f32; NW]; N],
+    o_far: [f32; N],
 }
 
 impl<const N: usize> RayPre<N> {
@@ -432,9 +450,9 @@ impl<const N: usize> RayPre<N> {
         let mut pre = RayPre {
             local: RayLocal::new(ray),
             near: [0; N],
-            inv: [[0.0; NW]; N],
-            o_near: [[0.0; NW]; N],
-            o_far: [[0.0; NW]; N],
+            inv: [0.0; N],
+            o_near: [0.0; N],
+            o_far: [0.0; N],
         };
         for i in 0..N {
             let (o, d) = (ray.origin[i], ray.dir[i]);
@@ -450,15 +468,15 @@ impl<const N: usize> RayPre<N> {
             let neg = d.is_sign_negative();
             let (lo, hi) = ((o - delta2) as f32, (o + delta2) as f32);
             pre.near[i] = neg as usize;
-            pre.inv[i] = [1.0 / d as f32; NW];
-            pre.o_near[i] = [if neg { lo } else { hi }; NW];
-            pre.o_far[i] = [if neg { hi } else { lo }; NW];
+            pre.inv[i] = 1.0 / d as f32;
+            pre.o_near[i] = if neg { lo } else { hi };
+            pre.o_far[i] = if neg { hi } else { lo };
         }
         pre
     }
 
     /// Slab test of the child boxes of a node against the parameter range [lo, hi]: a bit
-    /// mask of the boxes met, and their entry parameters.
+    /// mask of the boxes met, and their entry parameters (+∞ for the boxes missed).
     ///
     /// Conservative: the near and far planes of each slab are chosen by the sign of the
     /// direction and evaluated with the origin moved and rounded to f32 in the safe direction
@@ -482,9 +500,10 @@ impl<const N: usize> RayPre<N> {
                 let mut far = [_mm_set1_ps(hi); N];
                 for i in 0..N {
                     let s = self.near[i] & 1;
-                    let inv = ld(&self.inv[i]);
-                    let a = _mm_mul_ps(_mm_sub_ps(ld(&node.b[s][i]), ld(&self.o_near[i])), inv);
-                    let c = _mm_mul_ps(_mm_sub_ps(ld(&node.b[s ^ 1][i]), ld(&self.o_far[i])), inv);
+                    let inv = _mm_set1_ps(self.inv[i]);
+                    let (on, of) = (_mm_set1_ps(self.o_near[i]), _mm_set1_ps(self.o_far[i]));
+                    let a = _mm_mul_ps(_mm_sub_ps(ld(&node.b[s][i]), on), inv);
+                    let c = _mm_mul_ps(_mm_sub_ps(ld(&node.b[s ^ 1][i]), of), inv);
                     // maxps/minps return their second operand when either is NaN.
                     near[i] = _mm_max_ps(a, near[i]);
                     far[i] = _mm_min_ps(c, far[i]);
@@ -499,48 +518,13 @@ impl<const N: usize> RayPre<N> {
                     }
                     m = half;
                 }
-                mask |= (_mm_movemask_ps(_mm_cmple_ps(near[0], far[0])) as u32) << (4 * q);
-                _mm_storeu_ps(out.as_mut_ptr().add(4 * q), near[0]);
+                let met = _mm_cmple_ps(near[0], far[0]);
+                mask |= (_mm_movemask_ps(met) as u32) << (4 * q);
+                let missed = _mm_andnot_ps(met, _mm_set1_ps(f32::INFINITY));
+                let t = _mm_or_ps(_mm_and_ps(met, near[0]), missed);
+                _mm_storeu_ps(out.as_mut_ptr().add(4 * q), t);
             }
         }
-        (mask, out)
-    }
-
-    /// [`RayPre::slab`] with all 8 lanes in one AVX register (same results).
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn slab_avx2(&self, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
-        use std::arch::x86_64::*;
-        let ld = |a: &[f32; NW]| _mm256_loadu_ps(a.as_ptr());
-        let mut near = [_mm256_set1_ps(lo); N];
-        let mut far = [_mm256_set1_ps(hi); N];
-        for i in 0..N {
-            let s = self.near[i] & 1;
-            let inv = ld(&self.inv[i]);
-            let a = _mm256_mul_ps(_mm256_sub_ps(ld(&node.b[s][i]), ld(&self.o_near[i])), inv);
-            let c = _mm256_mul_ps(
-                _mm256_sub_ps(ld(&node.b[s ^ 1][i]), ld(&self.o_far[i])),
-                inv,
-            );
-            near[i] = _mm256_max_ps(a, near[i]);
-            far[i] = _mm256_min_ps(c, far[i]);
-        }
-        let mut m = N;
-        while m > 1 {
-            let half = m.div_ceil(2);
-            for j in 0..m / 2 {
-                near[j] = _mm256_max_ps(near[j], near[j + half]);
-                far[j] = _mm256_min_ps(far[j], far[j + half]);
-            }
-            m = half;
-        }
-        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near[0], far[0])) as u32;
-        let mut out = [0.0f32; NW];
-        _mm256_storeu_ps(out.as_mut_ptr(), near[0]);
         (mask, out)
     }
 
@@ -554,15 +538,19 @@ impl<const N: usize> RayPre<N> {
             let s = self.near[i] & 1;
             let (bn, bf) = (&node.b[s][i], &node.b[s ^ 1][i]);
             for l in 0..NW {
-                let a = (bn[l] - self.o_near[i][l]) * self.inv[i][l];
-                let c = (bf[l] - self.o_far[i][l]) * self.inv[i][l];
+                let a = (bn[l] - self.o_near[i]) * self.inv[i];
+                let c = (bf[l] - self.o_far[i]) * self.inv[i];
                 tn[l] = if a > tn[l] { a } else { tn[l] };
                 tf[l] = if c < tf[l] { c } else { tf[l] };
             }
         }
         let mut mask = 0;
         for l in 0..NW {
-            mask |= ((tn[l] <= tf[l]) as u32) << l;
+            let met = tn[l] <= tf[l];
+            mask |= (met as u32) << l;
+            if !met {
+                tn[l] = f32::INFINITY;
+            }
         }
         (mask, tn)
     }
@@ -674,7 +662,7 @@ impl<const N: usize> Block<N> {
     }
 
     /// The block test of [`Block::hit`] with the 4 lanes in one AVX register: the same
-    /// operations in the same order (no FMA), hence the same bits.
+    /// operations in the same order (no FMA), hence the same bits, and the same early return.
     ///
     /// # Safety
     /// The CPU must support AVX2.
@@ -719,6 +707,9 @@ impl<const N: usize> Block<N> {
         let mut ok = _mm256_and_pd(par, _mm256_and_pd(above, below));
         _mm256_storeu_pd(out.t.as_mut_ptr(), t);
         _mm256_storeu_pd(out.den.as_mut_ptr(), den);
+        if _mm256_movemask_pd(ok) == 0 {
+            return out;
+        }
         let sign = _mm256_set1_pd(-0.0);
         let w: [__m256d; N] = std::array::from_fn(|i| {
             _mm256_sub_pd(_mm256_mul_pd(num, d[i]), _mm256_mul_pd(den, p[i]))
@@ -1222,6 +1213,7 @@ impl<const N: usize> Collapse<'_, N> {
 }
 
 /// Best hit so far of a closest-hit traversal.
+#[derive(Clone, Copy)]
 struct Best<const N: usize> {
     t: f64,
     id: u32,
@@ -1430,28 +1422,69 @@ impl<const N: usize> Bvh<N> {
         tmax: f64,
         accept: impl Fn(u32) -> bool,
     ) -> Option<Hit<N>> {
+        let mut out = [None];
+        self.closest_packet::<1>(std::slice::from_ref(ray), tmin, tmax, &accept, &mut out);
+        out[0]
+    }
+
+    /// [`Bvh::closest_hit`] for every ray of `rays` into `out` (same length), traced in packets
+    /// of [`PACKET`] rays that share node visits. Each result is exactly the one
+    /// [`Bvh::closest_hit`] gives for that ray alone: the minimum of (t, id) over the accepted
+    /// hits does not depend on which rays travel together.
+    ///
+    /// # Panics
+    /// If `out` and `rays` differ in length.
+    pub fn closest_hits(
+        &self,
+        rays: &[Ray<N>],
+        tmin: f64,
+        tmax: f64,
+        accept: impl Fn(u32) -> bool,
+        out: &mut [Option<Hit<N>>],
+    ) {
+        assert_eq!(
+            rays.len(),
+            out.len(),
+            "Bvh::closest_hits: rays and out differ in length"
+        );
+        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+            self.closest_packet::<PACKET>(rays, tmin, tmax, &accept, out);
+        }
+    }
+
+    /// One packet of at most `P` rays, with the AVX2 kernels when the CPU has them.
+    #[inline]
+    fn closest_packet<const P: usize>(
+        &self,
+        rays: &[Ray<N>],
+        tmin: f64,
+        tmax: f64,
+        accept: &impl Fn(u32) -> bool,
+        out: &mut [Option<Hit<N>>],
+    ) {
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: AVX2 is available.
-            return unsafe { self.closest_hit_avx2(ray, tmin, tmax, accept) };
+            return unsafe { self.closest_hits_avx2::<P>(rays, tmin, tmax, accept, out) };
         }
-        self.closest_hit_impl::<false>(ray, tmin, tmax, accept)
+        self.closest_hits_impl::<false, P>(rays, tmin, tmax, accept, out);
     }
 
-    /// [`Bvh::closest_hit`] compiled for AVX2 (same results).
+    /// [`Bvh::closest_hits_impl`] compiled for AVX2 (same results).
     ///
     /// # Safety
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn closest_hit_avx2(
+    unsafe fn closest_hits_avx2<const P: usize>(
         &self,
-        ray: &Ray<N>,
+        rays: &[Ray<N>],
         tmin: f64,
         tmax: f64,
-        accept: impl Fn(u32) -> bool,
-    ) -> Option<Hit<N>> {
-        self.closest_hit_impl::<true>(ray, tmin, tmax, accept)
+        accept: &impl Fn(u32) -> bool,
+        out: &mut [Option<Hit<N>>],
+    ) {
+        self.closest_hits_impl::<true, P>(rays, tmin, tmax, accept, out)
     }
 
     /// Whether any simplex whose id passes `accept` is hit with t in (tmin, tmax) (shadow rays;
@@ -1463,28 +1496,67 @@ impl<const N: usize> Bvh<N> {
         tmax: f64,
         accept: impl Fn(u32) -> bool,
     ) -> bool {
+        let mut out = [false];
+        self.any_packet::<1>(std::slice::from_ref(ray), tmin, &[tmax], &accept, &mut out);
+        out[0]
+    }
+
+    /// [`Bvh::any_hit`] for every ray of `rays` with its own `tmax[i]`, into `out`, traced in
+    /// packets of [`PACKET`] rays (same results as one ray at a time).
+    ///
+    /// # Panics
+    /// If `rays`, `tmax` and `out` differ in length.
+    pub fn any_hits(
+        &self,
+        rays: &[Ray<N>],
+        tmin: f64,
+        tmax: &[f64],
+        accept: impl Fn(u32) -> bool,
+        out: &mut [bool],
+    ) {
+        assert!(
+            rays.len() == tmax.len() && rays.len() == out.len(),
+            "Bvh::any_hits: rays, tmax and out differ in length"
+        );
+        let packets = rays.chunks(PACKET).zip(tmax.chunks(PACKET));
+        for ((rays, tmax), out) in packets.zip(out.chunks_mut(PACKET)) {
+            self.any_packet::<PACKET>(rays, tmin, tmax, &accept, out);
+        }
+    }
+
+    /// One packet of at most `P` rays, with the AVX2 kernels when the CPU has them.
+    #[inline]
+    fn any_packet<const P: usize>(
+        &self,
+        rays: &[Ray<N>],
+        tmin: f64,
+        tmax: &[f64],
+        accept: &impl Fn(u32) -> bool,
+        out: &mut [bool],
+    ) {
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: AVX2 is available.
-            return unsafe { self.any_hit_avx2(ray, tmin, tmax, accept) };
+            return unsafe { self.any_hits_avx2::<P>(rays, tmin, tmax, accept, out) };
         }
-        self.any_hit_impl::<false>(ray, tmin, tmax, accept)
+        self.any_hits_impl::<false, P>(rays, tmin, tmax, accept, out);
     }
 
-    /// [`Bvh::any_hit`] compiled for AVX2 (same results).
+    /// [`Bvh::any_hits_impl`] compiled for AVX2 (same results).
     ///
     /// # Safety
     /// The CPU must support AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn any_hit_avx2(
+    unsafe fn any_hits_avx2<const P: usize>(
         &self,
-        ray: &Ray<N>,
+        rays: &[Ray<N>],
         tmin: f64,
-        tmax: f64,
-        accept: impl Fn(u32) -> bool,
-    ) -> bool {
-        self.any_hit_impl::<true>(ray, tmin, tmax, accept)
+        tmax: &[f64],
+        accept: &impl Fn(u32) -> bool,
+        out: &mut [bool],
+    ) {
+        self.any_hits_impl::<true, P>(rays, tmin, tmax, accept, out)
     }
 
     /// Tests a block, with the AVX2 kernel when `AVX` (only instantiated inside functions
@@ -1506,49 +1578,67 @@ impl<const N: usize> Bvh<N> {
         block.hit(ray, tmin, tmax)
     }
 
-    /// Slab test with the AVX2 kernel when `AVX` (only instantiated inside functions compiled
-    /// for AVX2).
+    /// Tests the children of inner node `cur` against the rays of the packet in the bit set
+    /// `rays` (ray q against [lo, limit[q]]) and returns the nearest child met with the rays
+    /// that met it (`EMPTY` if none), after pushing the other children met, farthest first (so
+    /// they are popped nearest first). A child's entry parameter is the smallest among its rays.
     #[inline(always)]
-    fn slab<const AVX: bool>(
+    #[allow(clippy::too_many_arguments)]
+    fn descend<const AVX: bool, const P: usize>(
         &self,
-        pre: &RayPre<N>,
-        node: &Node<N>,
-        lo: f32,
-        hi: f32,
-    ) -> (u32, [f32; NW]) {
-        #[cfg(target_arch = "x86_64")]
-        if AVX && NW == 8 {
-            // SAFETY: `AVX` is only true in code running after an AVX2 check.
-            return unsafe { pre.slab_avx2(node, lo, hi) };
-        }
-        pre.slab(node, lo, hi)
-    }
-
-    /// Tests the children of inner node `cur` against [lo, hi] and returns the nearest child
-    /// met (`EMPTY` if none), after pushing the other children met with their entry
-    /// parameters, farthest first (so they are popped nearest first).
-    #[inline(always)]
-    fn descend<const AVX: bool>(
-        &self,
-        pre: &RayPre<N>,
+        packet: &Packet<N, P>,
         cur: u32,
+        rays: u32,
         lo: f32,
-        hi: f32,
-        stack: &mut [MaybeUninit<(u32, f32)>; STACK_SIZE],
+        limit: &[f32; P],
+        stack: &mut [MaybeUninit<Entry>; STACK_SIZE],
         sp: &mut usize,
-    ) -> u32 {
+    ) -> (u32, u32) {
         let nd = &self.nodes[cur as usize];
         stats::count(0);
-        let (mask, tn) = self.slab::<AVX>(pre, nd, lo, hi);
+        // Byte l of `by_child`: the rays that meet child l; `tn`: a lower bound of their entry.
+        let (mask, tn, by_child) = 'test: {
+            if let Some(f) = &packet.frustum {
+                let mut hi = f32::NEG_INFINITY;
+                for (q, &l) in limit.iter().enumerate() {
+                    let l = if rays & (1 << q) != 0 {
+                        l
+                    } else {
+                        f32::NEG_INFINITY
+                    };
+                    hi = if l > hi { l } else { hi };
+                }
+                let (mask, tn) = f.slab::<AVX>(nd, lo, hi);
+                if mask == 0 {
+                    return (EMPTY, 0);
+                }
+                let mut leaves = 0u32;
+                for (l, &c) in nd.child.iter().enumerate() {
+                    leaves |= (c >> 31) << l;
+                }
+                // Inner children met go on with all the rays; leaves get each ray's own test.
+                if mask & leaves == 0 {
+                    break 'test (mask, tn, u64::from(rays) * 0x0101_0101_0101_0101);
+                }
+            }
+            let (met, tn) = slabs::<N, AVX, P>(&packet.pre, nd, rays, lo, limit);
+            let mut any = met;
+            any |= any >> 32;
+            any |= any >> 16;
+            any |= any >> 8;
+            (((any & 0xff) as u32), tn, transpose8(met))
+        };
         if mask == 0 {
-            return EMPTY;
+            return (EMPTY, 0);
         }
+        let rays_of = |l: usize| ((by_child >> (8 * l)) & 0xff) as u32;
         if mask & (mask - 1) == 0 {
-            return nd.child[mask.trailing_zeros() as usize];
+            let l = mask.trailing_zeros() as usize;
+            return (nd.child[l], rays_of(l));
         }
         // Insertion sort of the children met by entry parameter (a fixed-trip loop over the
         // lanes predicts better than iterating over the set bits).
-        let mut hits = [(0.0f32, 0u32); NW];
+        let mut hits = [(0.0f32, 0usize); NW];
         let mut c = 0;
         for l in 0..NW {
             if mask & (1 << l) != 0 {
@@ -1557,129 +1647,438 @@ impl<const N: usize> Bvh<N> {
                     hits[j] = hits[j - 1];
                     j -= 1;
                 }
-                hits[j] = (tn[l], nd.child[l]);
+                hits[j] = (tn[l], l);
                 c += 1;
             }
         }
         for j in (1..c).rev() {
-            stack[*sp].write((hits[j].1, hits[j].0));
+            let (t, l) = hits[j];
+            stack[*sp].write(Entry {
+                node: nd.child[l],
+                rays: rays_of(l),
+                t,
+            });
             *sp += 1;
         }
-        hits[0].1
+        let l = hits[0].1;
+        (nd.child[l], rays_of(l))
+    }
+
+    /// Pops the next stack entry that still has rays within reach (ray q keeps an entry whose
+    /// parameter is ≤ `limit[q]`, restricted to `alive`), or `None` when the stack is empty.
+    #[inline(always)]
+    fn pop<const P: usize>(
+        stack: &[MaybeUninit<Entry>; STACK_SIZE],
+        sp: &mut usize,
+        limit: &[f32; P],
+        alive: u32,
+    ) -> Option<(u32, u32)> {
+        while *sp > 0 {
+            *sp -= 1;
+            // SAFETY: the entries below `sp` were all written by `descend`.
+            let e = unsafe { stack[*sp].assume_init() };
+            let mut near = 0u32;
+            for (q, &l) in limit.iter().enumerate() {
+                near |= u32::from(e.t <= l) << q;
+            }
+            let rays = e.rays & near & alive;
+            if rays != 0 {
+                return Some((e.node, rays));
+            }
+        }
+        None
     }
 
     #[inline(always)]
-    fn closest_hit_impl<const AVX: bool>(
+    fn closest_hits_impl<const AVX: bool, const P: usize>(
         &self,
-        ray: &Ray<N>,
+        rays: &[Ray<N>],
         tmin: f64,
         tmax: f64,
-        accept: impl Fn(u32) -> bool,
-    ) -> Option<Hit<N>> {
-        if self.nodes.is_empty() || !(tmin < tmax) {
-            return None;
+        accept: &impl Fn(u32) -> bool,
+        out: &mut [Option<Hit<N>>],
+    ) {
+        out.fill(None);
+        let k = rays.len();
+        if self.nodes.is_empty() || !(tmin < tmax) || k == 0 {
+            return;
         }
-        let pre = RayPre::new(ray, self.reach);
+        let packet = Packet::<N, P>::new(rays, self.reach);
         // Boxes are culled against [tmin, best] widened (T_PAD, then outward to f32); simplices
         // use the exact open interval.
         let lo = f32_down(pad_down(tmin));
-        let mut limit = f32_up(pad_up(tmax));
-        let mut best = Best {
+        let mut limit = [f32::NEG_INFINITY; P];
+        limit[..k].fill(f32_up(pad_up(tmax)));
+        let mut best = [Best {
             t: tmax,
             id: u32::MAX,
             bary: [0.0; N],
             found: false,
-        };
+        }; P];
         // Blocks accept t < tmax, then, while a hit is held, t ≤ best.t (ties are settled by id).
-        let mut tmax_b = tmax;
-        let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK_SIZE];
+        let mut tmax_b = [tmax; P];
+        let mut stack = [MaybeUninit::<Entry>::uninit(); STACK_SIZE];
         let mut sp = 0usize;
-        let mut cur = 0u32;
+        let (mut cur, mut cur_rays) = (0u32, (1u32 << k) - 1);
         loop {
             // Descend through inner nodes, nearest child first.
             while cur & LEAF == 0 {
-                cur = self.descend::<AVX>(&pre, cur, lo, limit, &mut stack, &mut sp);
+                (cur, cur_rays) =
+                    self.descend::<AVX, P>(&packet, cur, cur_rays, lo, &limit, &mut stack, &mut sp);
             }
             if cur != EMPTY {
                 let block = &self.blocks[(cur & !LEAF) as usize];
-                let hits = self.block_hit::<AVX>(block, &pre.local, tmin, tmax_b);
-                let mut mask = hits.mask;
-                while mask != 0 {
-                    let l = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let (t, id) = (hits.t[l], block.ids[l]);
-                    if (!best.found || t < best.t || (t == best.t && id < best.id)) && accept(id) {
-                        best = Best {
-                            t,
-                            id,
-                            bary: hits.bary(l),
-                            found: true,
-                        };
-                        limit = f32_up(pad_up(t));
-                        tmax_b = t.next_up();
+                let mut left = cur_rays;
+                while left != 0 {
+                    let q = left.trailing_zeros() as usize;
+                    left &= left - 1;
+                    let hits = self.block_hit::<AVX>(block, &packet.pre[q].local, tmin, tmax_b[q]);
+                    let mut mask = hits.mask;
+                    let b = &mut best[q];
+                    while mask != 0 {
+                        let l = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let (t, id) = (hits.t[l], block.ids[l]);
+                        if (!b.found || t < b.t || (t == b.t && id < b.id)) && accept(id) {
+                            *b = Best {
+                                t,
+                                id,
+                                bary: hits.bary(l),
+                                found: true,
+                            };
+                            limit[q] = f32_up(pad_up(t));
+                            tmax_b[q] = t.next_up();
+                        }
                     }
                 }
             }
-            // Pop the next subtree whose entry parameter is still within reach.
-            loop {
-                if sp == 0 {
-                    return best.found.then_some(Hit {
-                        t: best.t,
-                        prim: best.id,
-                        bary: best.bary,
-                    });
-                }
-                sp -= 1;
-                // SAFETY: the entries below `sp` were all written by `descend`.
-                let (r, t) = unsafe { stack[sp].assume_init() };
-                if t <= limit {
-                    cur = r;
-                    break;
-                }
+            // Pop the next subtree whose entry parameter is still within reach of a ray.
+            match Self::pop::<P>(&stack, &mut sp, &limit, u32::MAX) {
+                Some(next) => (cur, cur_rays) = next,
+                None => break,
             }
+        }
+        for (o, b) in out.iter_mut().zip(&best) {
+            *o = b.found.then_some(Hit {
+                t: b.t,
+                prim: b.id,
+                bary: b.bary,
+            });
         }
     }
 
     #[inline(always)]
-    fn any_hit_impl<const AVX: bool>(
+    fn any_hits_impl<const AVX: bool, const P: usize>(
         &self,
-        ray: &Ray<N>,
+        rays: &[Ray<N>],
         tmin: f64,
-        tmax: f64,
-        accept: impl Fn(u32) -> bool,
-    ) -> bool {
-        if self.nodes.is_empty() || !(tmin < tmax) {
-            return false;
+        tmax: &[f64],
+        accept: &impl Fn(u32) -> bool,
+        out: &mut [bool],
+    ) {
+        out.fill(false);
+        let k = rays.len();
+        if self.nodes.is_empty() || k == 0 {
+            return;
         }
-        let pre = RayPre::new(ray, self.reach);
+        let packet = Packet::<N, P>::new(rays, self.reach);
         let lo = f32_down(pad_down(tmin));
-        let hi = f32_up(pad_up(tmax));
-        let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK_SIZE];
+        let mut limit = [f32::NEG_INFINITY; P];
+        // The rays still looking for a hit.
+        let mut alive = 0u32;
+        for (q, &t) in tmax.iter().enumerate() {
+            if tmin < t {
+                limit[q] = f32_up(pad_up(t));
+                alive |= 1 << q;
+            }
+        }
+        let mut stack = [MaybeUninit::<Entry>::uninit(); STACK_SIZE];
         let mut sp = 0usize;
-        let mut cur = 0u32;
-        loop {
+        let (mut cur, mut cur_rays) = (0u32, alive);
+        while alive != 0 {
             while cur & LEAF == 0 {
-                cur = self.descend::<AVX>(&pre, cur, lo, hi, &mut stack, &mut sp);
+                (cur, cur_rays) =
+                    self.descend::<AVX, P>(&packet, cur, cur_rays, lo, &limit, &mut stack, &mut sp);
             }
             if cur != EMPTY {
                 let block = &self.blocks[(cur & !LEAF) as usize];
-                let mut mask = self.block_hit::<AVX>(block, &pre.local, tmin, tmax).mask;
-                while mask != 0 {
-                    let l = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    if accept(block.ids[l]) {
-                        return true;
+                let mut left = cur_rays & alive;
+                while left != 0 {
+                    let q = left.trailing_zeros() as usize;
+                    left &= left - 1;
+                    let mut mask = self
+                        .block_hit::<AVX>(block, &packet.pre[q].local, tmin, tmax[q])
+                        .mask;
+                    while mask != 0 {
+                        let l = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        if accept(block.ids[l]) {
+                            out[q] = true;
+                            alive &= !(1 << q);
+                            break;
+                        }
                     }
                 }
             }
-            if sp == 0 {
-                return false;
+            match Self::pop::<P>(&stack, &mut sp, &limit, alive) {
+                Some(next) => (cur, cur_rays) = next,
+                None => break,
             }
-            sp -= 1;
-            // SAFETY: the entries below `sp` were all written by `descend`.
-            cur = unsafe { stack[sp].assume_init() }.0;
         }
     }
+}
+
+/// Slab tests of the children of `node` for the rays of the packet in the bit set `rays` (ray q
+/// against [lo, limit[q]]): byte q of the first result holds the children ray q meets, and the
+/// second the smallest entry parameter per child (+∞ for a child no ray meets).
+#[inline(always)]
+fn slabs<const N: usize, const AVX: bool, const P: usize>(
+    pre: &[RayPre<N>; P],
+    node: &Node<N>,
+    rays: u32,
+    lo: f32,
+    limit: &[f32; P],
+) -> (u64, [f32; NW]) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX && NW == 8 {
+        // SAFETY: `AVX` is only true in code running after an AVX2 check.
+        return unsafe { slabs_avx2(pre, node, rays, lo, limit) };
+    }
+    let mut met = 0u64;
+    let mut tn = [f32::INFINITY; NW];
+    let mut left = rays;
+    while left != 0 {
+        let q = left.trailing_zeros() as usize;
+        left &= left - 1;
+        stats::count(2);
+        let (mask, t) = pre[q].slab(node, lo, limit[q]);
+        met |= u64::from(mask) << (8 * q);
+        for l in 0..NW {
+            // Entry parameters of boxes met are never NaN.
+            tn[l] = if t[l] < tn[l] { t[l] } else { tn[l] };
+        }
+    }
+    (met, tn)
+}
+
+/// [`slabs`] with each ray's test in AVX2 registers (the node's boxes loaded once).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn slabs_avx2<const N: usize, const P: usize>(
+    pre: &[RayPre<N>; P],
+    node: &Node<N>,
+    rays: u32,
+    lo: f32,
+    limit: &[f32; P],
+) -> (u64, [f32; NW]) {
+    use std::arch::x86_64::*;
+    let ld = |a: &[f32; NW]| _mm256_loadu_ps(a.as_ptr());
+    let b: [[__m256; N]; 2] = std::array::from_fn(|s| std::array::from_fn(|i| ld(&node.b[s][i])));
+    let inf = _mm256_set1_ps(f32::INFINITY);
+    let mut tn = inf;
+    let mut met = 0u64;
+    let mut left = rays;
+    while left != 0 {
+        let q = left.trailing_zeros() as usize;
+        left &= left - 1;
+        stats::count(2);
+        let p = &pre[q];
+        let mut near = [_mm256_set1_ps(lo); N];
+        let mut far = [_mm256_set1_ps(limit[q]); N];
+        for i in 0..N {
+            let s = p.near[i] & 1;
+            let inv = _mm256_set1_ps(p.inv[i]);
+            let a = _mm256_mul_ps(_mm256_sub_ps(b[s][i], _mm256_set1_ps(p.o_near[i])), inv);
+            let c = _mm256_mul_ps(_mm256_sub_ps(b[s ^ 1][i], _mm256_set1_ps(p.o_far[i])), inv);
+            near[i] = _mm256_max_ps(a, near[i]);
+            far[i] = _mm256_min_ps(c, far[i]);
+        }
+        let mut m = N;
+        while m > 1 {
+            let half = m.div_ceil(2);
+            for j in 0..m / 2 {
+                near[j] = _mm256_max_ps(near[j], near[j + half]);
+                far[j] = _mm256_min_ps(far[j], far[j + half]);
+            }
+            m = half;
+        }
+        let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near[0], far[0]);
+        met |= (_mm256_movemask_ps(hit) as u64) << (8 * q);
+        tn = _mm256_min_ps(tn, _mm256_blendv_ps(inf, near[0], hit));
+    }
+    let mut out = [0.0f32; NW];
+    _mm256_storeu_ps(out.as_mut_ptr(), tn);
+    (met, out)
+}
+
+/// The rays of a packet, prepared for traversal, and their common frustum when they have one.
+struct Packet<const N: usize, const P: usize> {
+    pre: [RayPre<N>; P],
+    frustum: Option<Frustum<N>>,
+}
+
+impl<const N: usize, const P: usize> Packet<N, P> {
+    /// Prepares 1 ≤ `rays.len()` ≤ P ≤ [`PACKET`] rays (unused slots repeat the first ray; no
+    /// traversal mask ever names them).
+    #[inline(always)]
+    fn new(rays: &[Ray<N>], reach: f64) -> Self {
+        let k = rays.len();
+        let mut pre = [RayPre::new(&rays[0], reach); P];
+        for (p, ray) in pre.iter_mut().zip(rays).skip(1) {
+            *p = RayPre::new(ray, reach);
+        }
+        let frustum = if k > 1 { Frustum::new(&pre[..k]) } else { None };
+        Packet { pre, frustum }
+    }
+}
+
+/// Interval bounds of the slab data of a packet's rays, for one conservative box test on
+/// behalf of all of them: per axis the rays share the sign of their direction (so the same
+/// plane is the near one), and the moved origins and `1/d` lie in `[lo, hi]` ranges. Each
+/// ray's computed entry `fl(fl(b − o')·inv)` is then at least the smallest of the four corner
+/// products `fl(fl(b − o'_hi|lo)·inv_lo|hi)` (rounding is monotone), and its exit at most the
+/// largest, so a box the frustum misses is missed by every ray of the packet.
+struct Frustum<const N: usize> {
+    near: [usize; N],
+    o_near: [[f32; 2]; N],
+    o_far: [[f32; 2]; N],
+    inv: [[f32; 2]; N],
+}
+
+impl<const N: usize> Frustum<N> {
+    /// `None` when the rays do not share a direction sign on every axis, or a `1/d` is zero or
+    /// infinite (the per-ray test then handles every node).
+    #[inline(always)]
+    fn new(pre: &[RayPre<N>]) -> Option<Self> {
+        let p0 = &pre[0];
+        let mut f = Frustum {
+            near: p0.near,
+            o_near: std::array::from_fn(|i| [p0.o_near[i]; 2]),
+            o_far: std::array::from_fn(|i| [p0.o_far[i]; 2]),
+            inv: std::array::from_fn(|i| [p0.inv[i]; 2]),
+        };
+        let mut usable = true;
+        for p in pre {
+            for i in 0..N {
+                usable &= p.near[i] == f.near[i] && p.inv[i].is_finite() && p.inv[i] != 0.0;
+                let grow = |r: &mut [f32; 2], v: f32| *r = [r[0].min(v), r[1].max(v)];
+                grow(&mut f.o_near[i], p.o_near[i]);
+                grow(&mut f.o_far[i], p.o_far[i]);
+                grow(&mut f.inv[i], p.inv[i]);
+            }
+        }
+        usable.then_some(f)
+    }
+
+    /// The frustum's slab test of the children of `node` against [lo, hi]: the children that
+    /// some ray may meet, and a lower bound of their entry parameters (+∞ for the others).
+    #[inline(always)]
+    fn slab<const AVX: bool>(&self, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
+        #[cfg(target_arch = "x86_64")]
+        if AVX && NW == 8 {
+            // SAFETY: `AVX` is only true in code running after an AVX2 check.
+            return unsafe { self.slab_avx2(node, lo, hi) };
+        }
+        let mut tn = [lo; NW];
+        let mut tf = [hi; NW];
+        for i in 0..N {
+            let s = self.near[i] & 1;
+            let [il, ih] = self.inv[i];
+            for l in 0..NW {
+                let (zl, zh) = (
+                    node.b[s][i][l] - self.o_near[i][1],
+                    node.b[s][i][l] - self.o_near[i][0],
+                );
+                let a = (zl * il).min(zl * ih).min(zh * il).min(zh * ih);
+                let (fl, fh) = (
+                    node.b[s ^ 1][i][l] - self.o_far[i][1],
+                    node.b[s ^ 1][i][l] - self.o_far[i][0],
+                );
+                let c = (fl * il).max(fl * ih).max(fh * il).max(fh * ih);
+                tn[l] = if a > tn[l] { a } else { tn[l] };
+                tf[l] = if c < tf[l] { c } else { tf[l] };
+            }
+        }
+        let mut mask = 0;
+        for l in 0..NW {
+            let met = tn[l] <= tf[l];
+            mask |= (met as u32) << l;
+            if !met {
+                tn[l] = f32::INFINITY;
+            }
+        }
+        (mask, tn)
+    }
+
+    /// [`Frustum::slab`] in AVX2 registers (same results).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn slab_avx2(&self, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
+        use std::arch::x86_64::*;
+        let ld = |a: &[f32; NW]| _mm256_loadu_ps(a.as_ptr());
+        let mut near = _mm256_set1_ps(lo);
+        let mut far = _mm256_set1_ps(hi);
+        for i in 0..N {
+            let s = self.near[i] & 1;
+            let (il, ih) = (
+                _mm256_set1_ps(self.inv[i][0]),
+                _mm256_set1_ps(self.inv[i][1]),
+            );
+            let corners = |b: __m256, o: [f32; 2]| {
+                let zl = _mm256_sub_ps(b, _mm256_set1_ps(o[1]));
+                let zh = _mm256_sub_ps(b, _mm256_set1_ps(o[0]));
+                let p = [
+                    _mm256_mul_ps(zl, il),
+                    _mm256_mul_ps(zl, ih),
+                    _mm256_mul_ps(zh, il),
+                    _mm256_mul_ps(zh, ih),
+                ];
+                (p[0], p[1], p[2], p[3])
+            };
+            let (a0, a1, a2, a3) = corners(ld(&node.b[s][i]), self.o_near[i]);
+            let a = _mm256_min_ps(_mm256_min_ps(a0, a1), _mm256_min_ps(a2, a3));
+            let (c0, c1, c2, c3) = corners(ld(&node.b[s ^ 1][i]), self.o_far[i]);
+            let c = _mm256_max_ps(_mm256_max_ps(c0, c1), _mm256_max_ps(c2, c3));
+            near = _mm256_max_ps(a, near);
+            far = _mm256_min_ps(c, far);
+        }
+        let met = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
+        let mut out = [0.0f32; NW];
+        _mm256_storeu_ps(
+            out.as_mut_ptr(),
+            _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), near, met),
+        );
+        (_mm256_movemask_ps(met) as u32, out)
+    }
+}
+
+/// A traversal stack entry: a subtree, the rays of the packet that met its box, and the
+/// smallest of their entry parameters.
+#[derive(Clone, Copy)]
+struct Entry {
+    node: u32,
+    rays: u32,
+    t: f32,
+}
+
+/// Transposes the 8×8 bit matrix whose row r is byte r of `x` (bit c of the byte is column c):
+/// bit `8r + c` moves to bit `8c + r` (Hacker's Delight, §7-3).
+#[inline(always)]
+fn transpose8(mut x: u64) -> u64 {
+    let t = (x ^ (x >> 7)) & 0x00aa_00aa_00aa_00aa;
+    x ^= t ^ (t << 7);
+    let t = (x ^ (x >> 14)) & 0x0000_cccc_0000_cccc;
+    x ^= t ^ (t << 14);
+    let t = (x ^ (x >> 28)) & 0x0000_0000_f0f0_f0f0;
+    x ^ t ^ (t << 28)
 }
 
 #[cfg(test)]
@@ -1928,15 +2327,15 @@ mod tests {
                         "N={N} any_hit"
                     );
                     // The portable/SSE path too (the public calls take AVX2 when available).
-                    let sse = bvh.closest_hit_impl::<false>(&ray, tmin, tmax, f);
+                    let (mut sse, mut blocked) = ([None], [false]);
+                    let one = std::slice::from_ref(&ray);
+                    bvh.closest_hits_impl::<false, 1>(one, tmin, tmax, f, &mut sse);
                     assert_eq!(
-                        sse, want,
+                        sse[0], want,
                         "N={N} round {round} case {case} filter {fi}: SSE path"
                     );
-                    assert_eq!(
-                        bvh.any_hit_impl::<false>(&ray, tmin, tmax, f),
-                        want.is_some()
-                    );
+                    bvh.any_hits_impl::<false, 1>(one, tmin, &[tmax], f, &mut blocked);
+                    assert_eq!(blocked[0], want.is_some());
                     if let Some(h) = want {
                         hits += 1;
                         let same_t = prims.iter().filter(|(p, id)| {
@@ -1958,6 +2357,177 @@ mod tests {
     #[test]
     fn accel_bvh_closest_and_any_hit_equal_brute_force() {
         for_each_dim!(bvh_agrees_with_brute_force);
+    }
+
+    /// Rays for packet tests, of kind `kind`: 0 a pinhole (one origin, directions fanned
+    /// around an aim at a simplex: frustum on), 1 shadow-like (spread origins aimed near one
+    /// point: frustum on), 2 random (mixed signs: frustum off), 3 like 0 with one direction
+    /// component exactly zero in every ray (frustum off).
+    fn packet_rays<const N: usize>(
+        r: &mut TestRng,
+        s: &[([[f64; N]; N], u32)],
+        kind: usize,
+        count: usize,
+    ) -> Vec<Ray<N>> {
+        let origin = random_vector::<N>(r, 3.5);
+        let (pts, _) = &s[r.random_range(0..s.len())];
+        let aim = plane_point(r, pts, 0.0, 1.0);
+        let spread = [0.01, 0.1][r.random_range(0..2)];
+        (0..count)
+            .map(|_| match kind {
+                0 | 3 => {
+                    let to = add(&aim, &random_vector::<N>(r, spread));
+                    let mut dir = crate::linalg::sub(&to, &origin);
+                    if kind == 3 {
+                        dir[0] = 0.0;
+                    }
+                    Ray { origin, dir }
+                }
+                1 => {
+                    let o = add(&aim, &random_vector::<N>(r, spread));
+                    let light = add(&origin, &random_vector::<N>(r, spread));
+                    Ray {
+                        origin: o,
+                        dir: crate::linalg::sub(&light, &o),
+                    }
+                }
+                _ => Ray {
+                    origin: random_vector::<N>(r, 3.5),
+                    dir: random_vector::<N>(r, 1.0),
+                },
+            })
+            .collect()
+    }
+
+    fn packets_agree_with_brute_force<const N: usize>() {
+        let mut r = rng(2500 + N as u64);
+        let s = soup::<N>(&mut r, 300);
+        let prims = prepare(&s);
+        let bvh = build_soup(&s, PAR_MIN);
+        let (mut hits, mut frusta) = (0, [0usize; 2]);
+        for case in 0..400 {
+            let kind = case % 4;
+            let count = 1 + case % 11;
+            let rays = packet_rays(&mut r, &s, kind, count);
+            for chunk in rays.chunks(PACKET) {
+                let pre: Vec<RayPre<N>> = chunk.iter().map(|ray| RayPre::new(ray, 1.0)).collect();
+                frusta[Frustum::new(&pre).is_some() as usize] += 1;
+            }
+            let (tmin, tmax) = [(0.0, f64::INFINITY), (0.2, 1.0)][case % 2];
+            let tmaxes: Vec<f64> = (0..count).map(|_| r.random_range(0.1..2.0)).collect();
+            let filters: [&dyn Fn(u32) -> bool; 2] = [&|_| true, &|id| id % 3 != 0];
+            for f in filters {
+                let want: Vec<_> = rays
+                    .iter()
+                    .map(|ray| brute(&prims, ray, tmin, tmax, f))
+                    .collect();
+                let mut got = vec![None; count];
+                bvh.closest_hits(&rays, tmin, tmax, f, &mut got);
+                assert_eq!(got, want, "N={N} case {case}");
+                let mut portable = vec![None; count];
+                for (rs, out) in rays.chunks(PACKET).zip(portable.chunks_mut(PACKET)) {
+                    bvh.closest_hits_impl::<false, PACKET>(rs, tmin, tmax, &f, out);
+                }
+                assert_eq!(portable, want, "N={N} case {case}: portable path");
+                hits += want.iter().filter(|h| h.is_some()).count();
+
+                let want: Vec<bool> = rays
+                    .iter()
+                    .zip(&tmaxes)
+                    .map(|(ray, &t)| brute(&prims, ray, tmin, t, f).is_some())
+                    .collect();
+                let mut got = vec![false; count];
+                bvh.any_hits(&rays, tmin, &tmaxes, f, &mut got);
+                assert_eq!(got, want, "N={N} case {case}: any_hits");
+                let mut portable = vec![false; count];
+                let chunks = rays.chunks(PACKET).zip(tmaxes.chunks(PACKET));
+                for ((rs, ts), out) in chunks.zip(portable.chunks_mut(PACKET)) {
+                    bvh.any_hits_impl::<false, PACKET>(rs, tmin, ts, &f, out);
+                }
+                assert_eq!(portable, want, "N={N} case {case}: portable any_hits");
+            }
+        }
+        assert!(hits > 250, "N={N}: only {hits} hits");
+        assert!(
+            frusta[0] > 50 && frusta[1] > 50,
+            "N={N}: packets without/with frustum {frusta:?}"
+        );
+    }
+
+    #[test]
+    fn accel_packets_equal_brute_force_ray_by_ray() {
+        for_each_dim!(packets_agree_with_brute_force);
+    }
+
+    /// Whatever a ray of the packet meets, its frustum meets, no later than the ray enters.
+    fn frustum_is_conservative<const N: usize>() {
+        let mut r = rng(2600 + N as u64);
+        let s = soup::<N>(&mut r, 40);
+        let mut checked = 0;
+        for case in 0..600 {
+            let rays = packet_rays(&mut r, &s, case % 2, 2 + case % 7);
+            let pre: Vec<RayPre<N>> = rays.iter().map(|ray| RayPre::new(ray, 4.0)).collect();
+            let Some(f) = Frustum::new(&pre) else {
+                continue;
+            };
+            let mut node = Node::<N>::EMPTY;
+            for l in 0..NW - case % 3 {
+                // Boxes near the rays, so that many are met.
+                let ray = &rays[r.random_range(0..rays.len())];
+                let c = add(
+                    &ray.at(r.random_range(0.0..1.2)),
+                    &random_vector::<N>(&mut r, 0.4),
+                );
+                for i in 0..N {
+                    let h = r.random_range(0.0..0.6);
+                    node.b[0][i][l] = f32_down(c[i] - h);
+                    node.b[1][i][l] = f32_up(c[i] + h);
+                }
+            }
+            let (lo, hi) = (0.0, [f32::INFINITY, 1.5][case % 2]);
+            for avx in [false, true] {
+                let (fm, ft) = if avx && std::is_x86_feature_detected!("avx2") {
+                    f.slab::<true>(&node, lo, hi)
+                } else {
+                    f.slab::<false>(&node, lo, hi)
+                };
+                for p in &pre {
+                    let (m, t) = p.slab(&node, lo, hi);
+                    assert_eq!(
+                        m & !fm,
+                        0,
+                        "N={N} case {case}: a ray meets a box its frustum misses"
+                    );
+                    for l in 0..NW {
+                        if m & (1 << l) != 0 {
+                            assert!(ft[l] <= t[l], "N={N} case {case}: frustum enters later");
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 500, "N={N}: {checked}");
+    }
+
+    #[test]
+    fn accel_frustum_test_is_conservative() {
+        for_each_dim!(frustum_is_conservative);
+    }
+
+    #[test]
+    fn accel_transpose8_transposes_the_bit_matrix() {
+        let mut r = rng(2700);
+        for _ in 0..1000 {
+            let x: u64 = r.random();
+            let mut want = 0u64;
+            for row in 0..8 {
+                for col in 0..8 {
+                    want |= ((x >> (8 * row + col)) & 1) << (8 * col + row);
+                }
+            }
+            assert_eq!(transpose8(x), want);
+        }
     }
 
     #[test]
@@ -2159,8 +2729,11 @@ mod tests {
             #[cfg(target_arch = "x86_64")]
             if std::is_x86_feature_detected!("avx2") {
                 // SAFETY: AVX2 is available.
-                let (m2, t2) = unsafe { pre.slab_avx2(&node, 0.0, f32::INFINITY) };
-                assert_eq!((mask, tn.map(f32::to_bits)), (m2, t2.map(f32::to_bits)));
+                let (m2, t2) = unsafe { slabs_avx2(&[pre], &node, 1, 0.0, &[f32::INFINITY]) };
+                assert_eq!(
+                    (mask as u64, tn.map(f32::to_bits)),
+                    (m2, t2.map(f32::to_bits))
+                );
             }
             mask
         };

@@ -55,16 +55,44 @@ impl<const N: usize> Camera<N> {
     /// `index` (f = ½ in every axis is the centre), written into `u[..N−1]`.
     #[inline]
     pub fn retina_point(&self, index: usize, f: &[f64], u: &mut [f64]) {
+        let mut idx = [0; N];
+        self.cell_index(index, &mut idx);
+        self.cell_point(&idx, f, u);
+    }
+
+    /// The multi-index (i_1 … i_{N−1}) of cell `index` (i_1 varies fastest), into `idx[..N−1]`.
+    #[inline]
+    pub fn cell_index(&self, index: usize, idx: &mut [usize]) {
         let mut rest = index;
         for k in 0..N - 1 {
             let r = self.resolution[k];
-            let i = rest % r;
+            idx[k] = rest % r;
             rest /= r;
-            let half = r as f64 / 2.0;
+        }
+    }
+
+    /// Advances a multi-index of [`Camera::cell_index`] to the next cell.
+    #[inline]
+    pub fn next_cell(&self, idx: &mut [usize]) {
+        for k in 0..N - 1 {
+            idx[k] += 1;
+            if idx[k] < self.resolution[k] {
+                return;
+            }
+            idx[k] = 0;
+        }
+    }
+
+    /// [`Camera::retina_point`] of the cell with multi-index `idx` (see [`Camera::cell_index`]).
+    #[inline]
+    pub fn cell_point(&self, idx: &[usize], f: &[f64], u: &mut [f64]) {
+        for k in 0..N - 1 {
+            let half = self.resolution[k] as f64 / 2.0;
+            let i = idx[k] as f64;
             u[k] = if k == 1 {
-                (half - i as f64 - f[k]) * self.cell
+                (half - i - f[k]) * self.cell
             } else {
-                (i as f64 + f[k] - half) * self.cell
+                (i + f[k] - half) * self.cell
             };
         }
     }

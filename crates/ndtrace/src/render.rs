@@ -6,7 +6,7 @@
 //! depends only on the scene, the seed and the cell index, so the retina is bit-identical
 //! whatever the number of threads.
 
-use crate::accel::{Hit, Ray};
+use crate::accel::{Hit, Ray, PACKET};
 use crate::linalg::{add_scaled, dot, norm, scale, sub, Vector};
 use crate::scene::desc::RenderMode;
 use crate::scene::{Light, Scene};
@@ -91,6 +91,7 @@ fn sample_offsets(samples: usize, axes: usize, rng: &mut SplitMix, out: &mut Vec
 }
 
 /// What a cell records of its nearest hit.
+#[derive(Clone, Copy)]
 struct NearestHit<const N: usize> {
     depth: f64,
     normal: Vector<N>,
@@ -128,14 +129,18 @@ where
 {
     let cam = &scene.camera;
     let cells = cam.cell_count();
+    // Zeroed allocations cost nothing up front (the pages are mapped as the parallel loop first
+    // writes them); the loop writes every cell's depth and ids, misses included.
     let mut rgba = vec![0f32; cells * 4];
-    let mut depth = vec![f32::INFINITY; cells];
+    let mut depth = vec![0f32; cells];
     let mut normal = vec![0f32; cells * N];
-    let mut object_id = vec![-1i32; cells];
-    let mut primitive_id = vec![-1i64; cells];
+    let mut object_id = vec![0i32; cells];
+    let mut primitive_id = vec![0i64; cells];
     let samples = scene.render.samples as usize;
     let depth_range = depth_range(scene);
 
+    // Cells are traced in groups whose rays fill a packet (all samples of a cell go together).
+    let group = (PACKET / samples).max(1);
     rgba.par_chunks_mut(CHUNK * 4)
         .zip(depth.par_chunks_mut(CHUNK))
         .zip(normal.par_chunks_mut(CHUNK * N))
@@ -147,68 +152,59 @@ where
                 if progress.cancel.load(Ordering::Relaxed) {
                     return;
                 }
-                let mut offsets = Vec::with_capacity(samples * (N - 1));
+                let mut work = Work::default();
+                let mut offsets = vec![0.5; N - 1];
                 let mut u = [0.0; N];
-                for c in 0..depth.len() {
-                    let cell = chunk * CHUNK + c;
-                    let mut rng = SplitMix::new(scene.render.seed, cell as u64);
-                    sample_offsets(samples, N - 1, &mut rng, &mut offsets);
-                    let mut color = [0.0f64; 3];
-                    let mut covered = 0usize;
-                    let mut nearest: Option<NearestHit<N>> = None;
-                    for j in 0..samples {
-                        cam.retina_point(cell, &offsets[j * (N - 1)..(j + 1) * (N - 1)], &mut u);
-                        let ray = cam.ray(&u[..N - 1]);
-                        let Some(hit) = scene.bvh.closest_hit(&ray, 0.0, f64::INFINITY, &accept)
-                        else {
-                            continue;
-                        };
-                        covered += 1;
-                        let (obj, local) = scene.locate(hit.prim);
-                        let n = shading_normal(scene, &hit, obj, local, &ray);
-                        let c = match scene.render.mode {
-                            RenderMode::Shaded => shade(scene, &ray, &hit, obj, &n),
-                            RenderMode::Depth => {
-                                let d = cam.depth(&ray, hit.t);
-                                let g = 1.0
-                                    - 0.8
-                                        * ((d - depth_range.0) / (depth_range.1 - depth_range.0))
-                                            .clamp(0.0, 1.0);
-                                [g; 3]
+                let mut idx = [0; N];
+                cam.cell_index(chunk * CHUNK, &mut idx);
+                for first in (0..depth.len()).step_by(group) {
+                    let cells = first..(first + group).min(depth.len());
+                    work.rays.clear();
+                    for c in cells.clone() {
+                        if samples > 1 {
+                            let cell = chunk * CHUNK + c;
+                            let mut rng = SplitMix::new(scene.render.seed, cell as u64);
+                            sample_offsets(samples, N - 1, &mut rng, &mut offsets);
+                        }
+                        for j in 0..samples {
+                            let f = &offsets[j * (N - 1)..(j + 1) * (N - 1)];
+                            cam.cell_point(&idx, f, &mut u);
+                            work.rays.push(cam.ray(&u[..N - 1]));
+                        }
+                        cam.next_cell(&mut idx);
+                    }
+                    let colors = work.trace(scene, &accept, depth_range);
+                    for (c, cell_rays) in cells.zip(colors.chunks(samples)) {
+                        let mut color = [0.0f64; 3];
+                        let mut covered = 0usize;
+                        let mut nearest: Option<NearestHit<N>> = None;
+                        for r in cell_rays {
+                            let Some((col, h)) = r else { continue };
+                            covered += 1;
+                            for k in 0..3 {
+                                color[k] += col[k];
                             }
-                            RenderMode::Normal => {
-                                std::array::from_fn(|k| if k < N { 0.5 + 0.5 * n[k] } else { 0.5 })
+                            if nearest.as_ref().is_none_or(|n| h.depth < n.depth) {
+                                nearest = Some(*h);
                             }
-                            RenderMode::PrimitiveId => id_color(hit.prim),
-                            RenderMode::Barycentric => {
-                                std::array::from_fn(|k| if k < N { hit.bary[k] } else { 0.0 })
-                            }
-                        };
+                        }
+                        let inv = 1.0 / samples as f64;
                         for k in 0..3 {
-                            color[k] += c[k];
+                            rgba[c * 4 + k] = (color[k] * inv) as f32;
                         }
-                        let d = cam.depth(&ray, hit.t);
-                        if nearest.as_ref().is_none_or(|h| d < h.depth) {
-                            nearest = Some(NearestHit {
-                                depth: d,
-                                normal: n,
-                                object: obj as i32,
-                                primitive: local as i64,
-                            });
+                        rgba[c * 4 + 3] = (covered as f64 * inv) as f32;
+                        if let Some(h) = nearest {
+                            depth[c] = h.depth as f32;
+                            for k in 0..N {
+                                normal[c * N + k] = h.normal[k] as f32;
+                            }
+                            object_id[c] = h.object;
+                            primitive_id[c] = h.primitive;
+                        } else {
+                            depth[c] = f32::INFINITY;
+                            object_id[c] = -1;
+                            primitive_id[c] = -1;
                         }
-                    }
-                    let inv = 1.0 / samples as f64;
-                    for k in 0..3 {
-                        rgba[c * 4 + k] = (color[k] * inv) as f32;
-                    }
-                    rgba[c * 4 + 3] = (covered as f64 * inv) as f32;
-                    if let Some(h) = nearest {
-                        depth[c] = h.depth as f32;
-                        for k in 0..N {
-                            normal[c * N + k] = h.normal[k] as f32;
-                        }
-                        object_id[c] = h.object;
-                        primitive_id[c] = h.primitive;
                     }
                 }
                 progress.done.fetch_add(depth.len(), Ordering::Relaxed);
@@ -291,23 +287,164 @@ fn shading_normal<const N: usize>(
     n
 }
 
-/// N-D Lambert + Blinn–Phong with hard shadows (course notes Part II(B)): the intensity of a
-/// light is the dot product of the unit normal with the unit vector toward it, clamped at 0.
-fn shade<const N: usize>(
-    scene: &Scene<N>,
+/// The per-group buffers of a trace: the camera rays of a group of cells, their hits, and the
+/// shadow rays their shading asks for, each traced as packets.
+struct Work<const N: usize> {
+    rays: Vec<Ray<N>>,
+    hits: Vec<Option<Hit<N>>>,
+    /// Per camera ray: colour so far (ambient) and its nearest-hit record, for rays that hit.
+    shaded: Vec<Option<([f64; 3], NearestHit<N>)>>,
+    /// Light contributions (camera ray, colour), in ray order then light order; `shadow[i]`
+    /// is the index of the term's shadow ray, if it has one.
+    terms: Vec<(usize, [f64; 3])>,
+    shadow: Vec<Option<usize>>,
+    /// Shadow rays in light order (coherent packets), their tmax, their results, their term.
+    shadow_rays: Vec<Ray<N>>,
+    shadow_tmax: Vec<f64>,
+    blocked: Vec<bool>,
+    shadow_term: Vec<usize>,
+    /// (light, term, shadow ray, tmax) as shading asks for them.
+    requests: Vec<(usize, usize, Ray<N>, f64)>,
+}
+
+impl<const N: usize> Default for Work<N> {
+    fn default() -> Self {
+        Work {
+            rays: Vec::new(),
+            hits: Vec::new(),
+            shaded: Vec::new(),
+            terms: Vec::new(),
+            shadow: Vec::new(),
+            shadow_rays: Vec::new(),
+            shadow_tmax: Vec::new(),
+            blocked: Vec::new(),
+            shadow_term: Vec::new(),
+            requests: Vec::new(),
+        }
+    }
+}
+
+impl<const N: usize> Work<N> {
+    /// Traces `self.rays` and shades their hits: per ray, its colour and nearest-hit record
+    /// (`None` on a miss).
+    fn trace(
+        &mut self,
+        scene: &Scene<N>,
+        accept: &(impl Fn(u32) -> bool + Sync),
+        depth_range: (f64, f64),
+    ) -> &[Option<([f64; 3], NearestHit<N>)>] {
+        let cam = &scene.camera;
+        self.hits.clear();
+        self.hits.resize(self.rays.len(), None);
+        scene
+            .bvh
+            .closest_hits(&self.rays, 0.0, f64::INFINITY, accept, &mut self.hits);
+        self.shaded.clear();
+        self.terms.clear();
+        self.shadow.clear();
+        let requests = &mut self.requests;
+        requests.clear();
+        for (r, (ray, hit)) in self.rays.iter().zip(&self.hits).enumerate() {
+            let Some(hit) = hit else {
+                self.shaded.push(None);
+                continue;
+            };
+            let (obj, local) = scene.locate(hit.prim);
+            let n = shading_normal(scene, hit, obj, local, ray);
+            let c = match scene.render.mode {
+                RenderMode::Shaded => {
+                    let m = &scene.objects[obj].material;
+                    for (l, term) in light_terms(scene, ray, hit, obj, &n).enumerate() {
+                        let (color, shadow) = term;
+                        if let Some((sray, tmax)) = shadow {
+                            requests.push((l, self.terms.len(), sray, tmax));
+                            self.shadow.push(Some(0));
+                        } else {
+                            self.shadow.push(None);
+                        }
+                        self.terms.push((r, color));
+                    }
+                    std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k])
+                }
+                RenderMode::Depth => {
+                    let d = cam.depth(ray, hit.t);
+                    let g = 1.0
+                        - 0.8
+                            * ((d - depth_range.0) / (depth_range.1 - depth_range.0))
+                                .clamp(0.0, 1.0);
+                    [g; 3]
+                }
+                RenderMode::Normal => {
+                    std::array::from_fn(|k| if k < N { 0.5 + 0.5 * n[k] } else { 0.5 })
+                }
+                RenderMode::PrimitiveId => id_color(hit.prim),
+                RenderMode::Barycentric => {
+                    std::array::from_fn(|k| if k < N { hit.bary[k] } else { 0.0 })
+                }
+            };
+            let nearest = NearestHit {
+                depth: cam.depth(ray, hit.t),
+                normal: n,
+                object: obj as i32,
+                primitive: local as i64,
+            };
+            self.shaded.push(Some((c, nearest)));
+        }
+        if !requests.is_empty() {
+            // Light order, so that each packet holds rays toward one light.
+            requests.sort_by_key(|q| q.0);
+            self.shadow_rays.clear();
+            self.shadow_tmax.clear();
+            self.shadow_term.clear();
+            for (i, &(_, term, sray, tmax)) in requests.iter().enumerate() {
+                self.shadow[term] = Some(i);
+                self.shadow_rays.push(sray);
+                self.shadow_tmax.push(tmax);
+                self.shadow_term.push(term);
+            }
+            self.blocked.clear();
+            self.blocked.resize(requests.len(), false);
+            scene.bvh.any_hits(
+                &self.shadow_rays,
+                0.0,
+                &self.shadow_tmax,
+                |_| true,
+                &mut self.blocked,
+            );
+        }
+        // Contributions in light order per ray (the order of the sum, as for one ray alone).
+        for (i, &(r, color)) in self.terms.iter().enumerate() {
+            if self.shadow[i].is_some_and(|s| self.blocked[s]) {
+                continue;
+            }
+            if let Some((c, _)) = &mut self.shaded[r] {
+                for k in 0..3 {
+                    c[k] += color[k];
+                }
+            }
+        }
+        &self.shaded
+    }
+}
+
+/// N-D Lambert + Blinn–Phong (course notes Part II(B)): per light that faces the surface, its
+/// colour contribution and the shadow ray (with its tmax) that decides whether it counts. The
+/// intensity of a light is the dot product of the unit normal with the unit vector toward it,
+/// clamped at 0 (lights behind the surface contribute nothing and need no shadow ray).
+fn light_terms<'a, const N: usize>(
+    scene: &'a Scene<N>,
     ray: &Ray<N>,
     hit: &Hit<N>,
     obj: usize,
     n: &Vector<N>,
-) -> [f64; 3] {
+) -> impl Iterator<Item = ([f64; 3], Option<(Ray<N>, f64)>)> + 'a {
     let m = &scene.objects[obj].material;
     let x = add_scaled(&ray.origin, hit.t, &ray.dir);
-    let dl = norm(&ray.dir);
-    let v = scale(&ray.dir, -1.0 / dl);
-    let mut c: [f64; 3] = std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k]);
+    let v = scale(&ray.dir, -1.0 / norm(&ray.dir));
     let flat = scene.flat_normals[hit.prim as usize];
     let eps = 1e-7 * scene.extent;
-    for light in &scene.lights {
+    let n = *n;
+    scene.lights.iter().filter_map(move |light| {
         let (l, dist, color, atten) = match light {
             Light::Directional { direction, color } => (*direction, f64::INFINITY, color, 1.0),
             Light::Point {
@@ -318,7 +455,7 @@ fn shade<const N: usize>(
                 let d = sub(position, &x);
                 let dist = norm(&d);
                 if !(dist > 0.0) {
-                    continue;
+                    return None;
                 }
                 let atten = if *falloff == 0.0 {
                     1.0
@@ -328,38 +465,29 @@ fn shade<const N: usize>(
                 (scale(&d, 1.0 / dist), dist, color, atten)
             }
         };
-        let ndl = dot(n, &l);
+        let ndl = dot(&n, &l);
         if ndl <= 0.0 {
-            continue;
+            return None;
         }
-        if scene.render.shadows {
+        let shadow = scene.render.shadows.then(|| {
             // Leave the surface on the light's side of the simplex's hyperplane.
             let side = if dot(&flat, &l) >= 0.0 { eps } else { -eps };
             let origin = add_scaled(&x, side, &flat);
-            let sray = Ray { origin, dir: l };
-            if scene.bvh.any_hit(&sray, 0.0, dist - eps, |_| true) {
-                continue;
-            }
-        }
-        let h = {
+            (Ray { origin, dir: l }, dist - eps)
+        });
+        let spec = if m.specular.iter().any(|&s| s > 0.0) {
             let s = add_scaled(&l, 1.0, &v);
             let len = norm(&s);
-            if len > 0.0 {
-                scale(&s, 1.0 / len)
-            } else {
-                l
-            }
-        };
-        let spec = if m.specular.iter().any(|&s| s > 0.0) {
-            dot(n, &h).max(0.0).powf(m.shininess)
+            let h = if len > 0.0 { scale(&s, 1.0 / len) } else { l };
+            dot(&n, &h).max(0.0).powf(m.shininess)
         } else {
             0.0
         };
-        for k in 0..3 {
-            c[k] += atten * color[k] * (m.diffuse[k] * m.color[k] * ndl + m.specular[k] * spec);
-        }
-    }
-    c
+        let c = std::array::from_fn(|k| {
+            atten * color[k] * (m.diffuse[k] * m.color[k] * ndl + m.specular[k] * spec)
+        });
+        Some((c, shadow))
+    })
 }
 
 #[cfg(test)]
