@@ -1581,7 +1581,8 @@ impl<const N: usize> Bvh<N> {
     /// Tests the children of inner node `cur` against the rays of the packet in the bit set
     /// `rays` (ray q against [lo, limit[q]]) and returns the nearest child met with the rays
     /// that met it (`EMPTY` if none), after pushing the other children met, farthest first (so
-    /// they are popped nearest first). A child's entry parameter is the smallest among its rays.
+    /// they are popped nearest first). A child's entry parameter is a lower bound of its rays'
+    /// entries (their smallest, or the frustum's bound).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn descend<const AVX: bool, const P: usize>(
@@ -1598,7 +1599,8 @@ impl<const N: usize> Bvh<N> {
         stats::count(0);
         // Byte l of `by_child`: the rays that meet child l; `tn`: a lower bound of their entry.
         let (mask, tn, by_child) = 'test: {
-            if let Some(f) = &packet.frustum {
+            // The frustum stands in for two or more rays (one ray is cheaper tested alone).
+            if let (Some(f), true) = (&packet.frustum, rays & (rays - 1) != 0) {
                 let mut hi = f32::NEG_INFINITY;
                 for (q, &l) in limit.iter().enumerate() {
                     let l = if rays & (1 << q) != 0 {

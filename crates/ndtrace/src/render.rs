@@ -2,9 +2,11 @@
 //! from the BVH, N-D Lambert + Blinn–Phong shading with hard shadows (course notes, "Ray
 //! Tracing" and Part II(B) "4D Shading"), written into a [`Retina`].
 //!
-//! Work is split into fixed chunks of cells traced in parallel with rayon; every cell's result
-//! depends only on the scene, the seed and the cell index, so the retina is bit-identical
-//! whatever the number of threads.
+//! Work is split into fixed chunks of cells traced in parallel with rayon. Within a chunk, the
+//! camera rays of neighbouring cells go to the BVH as packets ([`crate::accel::PACKET`] rays),
+//! and the shadow rays of their hits as packets toward each light; a ray's hit does not depend
+//! on the rays it travels with. Every cell's result depends only on the scene, the seed and the
+//! cell index, so the retina is bit-identical whatever the number of threads.
 
 use crate::accel::{Hit, Ray, PACKET};
 use crate::linalg::{add_scaled, dot, norm, scale, sub, Vector};
@@ -153,7 +155,9 @@ where
                     return;
                 }
                 let mut work = Work::default();
-                let mut offsets = vec![0.5; N - 1];
+                // One sample per cell: its centre, the same for every cell.
+                let mut offsets = Vec::with_capacity(samples * (N - 1));
+                sample_offsets(1, N - 1, &mut SplitMix::new(0, 0), &mut offsets);
                 let mut u = [0.0; N];
                 let mut idx = [0; N];
                 cam.cell_index(chunk * CHUNK, &mut idx);
@@ -298,11 +302,10 @@ struct Work<const N: usize> {
     /// is the index of the term's shadow ray, if it has one.
     terms: Vec<(usize, [f64; 3])>,
     shadow: Vec<Option<usize>>,
-    /// Shadow rays in light order (coherent packets), their tmax, their results, their term.
+    /// Shadow rays in light order (coherent packets), their tmax and their results.
     shadow_rays: Vec<Ray<N>>,
     shadow_tmax: Vec<f64>,
     blocked: Vec<bool>,
-    shadow_term: Vec<usize>,
     /// (light, term, shadow ray, tmax) as shading asks for them.
     requests: Vec<(usize, usize, Ray<N>, f64)>,
 }
@@ -318,7 +321,6 @@ impl<const N: usize> Default for Work<N> {
             shadow_rays: Vec::new(),
             shadow_tmax: Vec::new(),
             blocked: Vec::new(),
-            shadow_term: Vec::new(),
             requests: Vec::new(),
         }
     }
@@ -354,14 +356,12 @@ impl<const N: usize> Work<N> {
             let c = match scene.render.mode {
                 RenderMode::Shaded => {
                     let m = &scene.objects[obj].material;
-                    for (l, term) in light_terms(scene, ray, hit, obj, &n).enumerate() {
-                        let (color, shadow) = term;
+                    for (l, color, shadow) in light_terms(scene, ray, hit, obj, &n) {
                         if let Some((sray, tmax)) = shadow {
                             requests.push((l, self.terms.len(), sray, tmax));
-                            self.shadow.push(Some(0));
-                        } else {
-                            self.shadow.push(None);
                         }
+                        // Set to the shadow ray's index once the rays are in light order.
+                        self.shadow.push(None);
                         self.terms.push((r, color));
                     }
                     std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k])
@@ -395,12 +395,10 @@ impl<const N: usize> Work<N> {
             requests.sort_by_key(|q| q.0);
             self.shadow_rays.clear();
             self.shadow_tmax.clear();
-            self.shadow_term.clear();
             for (i, &(_, term, sray, tmax)) in requests.iter().enumerate() {
                 self.shadow[term] = Some(i);
                 self.shadow_rays.push(sray);
                 self.shadow_tmax.push(tmax);
-                self.shadow_term.push(term);
             }
             self.blocked.clear();
             self.blocked.resize(requests.len(), false);
@@ -428,7 +426,8 @@ impl<const N: usize> Work<N> {
 }
 
 /// N-D Lambert + Blinn–Phong (course notes Part II(B)): per light that faces the surface, its
-/// colour contribution and the shadow ray (with its tmax) that decides whether it counts. The
+/// index, its colour contribution and the shadow ray (with its tmax) that decides whether it
+/// counts. The
 /// intensity of a light is the dot product of the unit normal with the unit vector toward it,
 /// clamped at 0 (lights behind the surface contribute nothing and need no shadow ray).
 fn light_terms<'a, const N: usize>(
@@ -437,62 +436,180 @@ fn light_terms<'a, const N: usize>(
     hit: &Hit<N>,
     obj: usize,
     n: &Vector<N>,
-) -> impl Iterator<Item = ([f64; 3], Option<(Ray<N>, f64)>)> + 'a {
+) -> impl Iterator<Item = (usize, [f64; 3], Option<(Ray<N>, f64)>)> + 'a {
     let m = &scene.objects[obj].material;
     let x = add_scaled(&ray.origin, hit.t, &ray.dir);
     let v = scale(&ray.dir, -1.0 / norm(&ray.dir));
     let flat = scene.flat_normals[hit.prim as usize];
     let eps = 1e-7 * scene.extent;
     let n = *n;
-    scene.lights.iter().filter_map(move |light| {
-        let (l, dist, color, atten) = match light {
-            Light::Directional { direction, color } => (*direction, f64::INFINITY, color, 1.0),
-            Light::Point {
-                position,
-                color,
-                falloff,
-            } => {
-                let d = sub(position, &x);
-                let dist = norm(&d);
-                if !(dist > 0.0) {
-                    return None;
+    scene
+        .lights
+        .iter()
+        .enumerate()
+        .filter_map(move |(index, light)| {
+            let (l, dist, color, atten) = match light {
+                Light::Directional { direction, color } => (*direction, f64::INFINITY, color, 1.0),
+                Light::Point {
+                    position,
+                    color,
+                    falloff,
+                } => {
+                    let d = sub(position, &x);
+                    let dist = norm(&d);
+                    if !(dist > 0.0) {
+                        return None;
+                    }
+                    let atten = if *falloff == 0.0 {
+                        1.0
+                    } else {
+                        dist.powf(-falloff)
+                    };
+                    (scale(&d, 1.0 / dist), dist, color, atten)
                 }
-                let atten = if *falloff == 0.0 {
-                    1.0
-                } else {
-                    dist.powf(-falloff)
-                };
-                (scale(&d, 1.0 / dist), dist, color, atten)
+            };
+            let ndl = dot(&n, &l);
+            if ndl <= 0.0 {
+                return None;
             }
-        };
-        let ndl = dot(&n, &l);
-        if ndl <= 0.0 {
-            return None;
-        }
-        let shadow = scene.render.shadows.then(|| {
-            // Leave the surface on the light's side of the simplex's hyperplane.
-            let side = if dot(&flat, &l) >= 0.0 { eps } else { -eps };
-            let origin = add_scaled(&x, side, &flat);
-            (Ray { origin, dir: l }, dist - eps)
-        });
-        let spec = if m.specular.iter().any(|&s| s > 0.0) {
-            let s = add_scaled(&l, 1.0, &v);
-            let len = norm(&s);
-            let h = if len > 0.0 { scale(&s, 1.0 / len) } else { l };
-            dot(&n, &h).max(0.0).powf(m.shininess)
-        } else {
-            0.0
-        };
-        let c = std::array::from_fn(|k| {
-            atten * color[k] * (m.diffuse[k] * m.color[k] * ndl + m.specular[k] * spec)
-        });
-        Some((c, shadow))
-    })
+            let shadow = scene.render.shadows.then(|| {
+                // Leave the surface on the light's side of the simplex's hyperplane.
+                let side = if dot(&flat, &l) >= 0.0 { eps } else { -eps };
+                let origin = add_scaled(&x, side, &flat);
+                (Ray { origin, dir: l }, dist - eps)
+            });
+            let spec = if m.specular.iter().any(|&s| s > 0.0) {
+                let s = add_scaled(&l, 1.0, &v);
+                let len = norm(&s);
+                let h = if len > 0.0 { scale(&s, 1.0 / len) } else { l };
+                dot(&n, &h).max(0.0).powf(m.shininess)
+            } else {
+                0.0
+            };
+            let c = std::array::from_fn(|k| {
+                atten * color[k] * (m.diffuse[k] * m.color[k] * ndl + m.specular[k] * spec)
+            });
+            Some((index, c, shadow))
+        })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::{load_toml_str, AnyScene};
+
+    /// One cell, one ray at a time, with the single-ray queries: the colour sum and nearest hit
+    /// the packet path must reproduce bit for bit.
+    fn one_ray_at_a_time<const N: usize>(
+        scene: &Scene<N>,
+        cell: usize,
+    ) -> ([f64; 3], usize, usize) {
+        let samples = scene.render.samples as usize;
+        let mut rng = SplitMix::new(scene.render.seed, cell as u64);
+        let mut offsets = vec![];
+        sample_offsets(samples, N - 1, &mut rng, &mut offsets);
+        let (mut color, mut covered, mut blocked) = ([0.0; 3], 0, 0);
+        let mut u = [0.0; N];
+        for j in 0..samples {
+            scene
+                .camera
+                .retina_point(cell, &offsets[j * (N - 1)..(j + 1) * (N - 1)], &mut u);
+            let ray = scene.camera.ray(&u[..N - 1]);
+            let Some(hit) = scene.bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true) else {
+                continue;
+            };
+            covered += 1;
+            let (obj, local) = scene.locate(hit.prim);
+            let n = shading_normal(scene, &hit, obj, local, &ray);
+            let m = &scene.objects[obj].material;
+            let mut c: [f64; 3] =
+                std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k]);
+            for (_, term, shadow) in light_terms(scene, &ray, &hit, obj, &n) {
+                if shadow.is_some_and(|(s, tmax)| scene.bvh.any_hit(&s, 0.0, tmax, |_| true)) {
+                    blocked += 1;
+                    continue;
+                }
+                for k in 0..3 {
+                    c[k] += term[k];
+                }
+            }
+            for k in 0..3 {
+                color[k] += c[k];
+            }
+        }
+        (color, covered, blocked)
+    }
+
+    #[test]
+    fn packets_shade_every_cell_as_one_ray_at_a_time() {
+        // Objects that shadow each other, a light behind some surfaces (filtered out before the
+        // shadow pass), two lights of each kind, 1 and 3 samples (packets split across cells).
+        for samples in [1, 3] {
+            let text = format!(
+                r#"
+dim = 3
+ambient = [0.1, 0.1, 0.1]
+[camera]
+position = [0.5, 1.0, 6.0]
+look_at = [0.0, 0.0, 0.0]
+up = [[0.0, 1.0, 0.0]]
+fov = 40.0
+resolution = [37, 29]
+[[lights]]
+type = "point"
+position = [2.0, 3.0, 2.5]
+color = [0.8, 0.7, 0.6]
+[[lights]]
+type = "directional"
+direction = [-1.0, 0.5, 0.2]
+color = [0.3, 0.4, 0.5]
+[[lights]]
+type = "point"
+position = [-3.0, -0.5, 1.0]
+color = [0.2, 0.2, 0.9]
+falloff = 1.0
+[[objects]]
+shape = "sphere"
+subdivisions = 2
+material = {{ color = [0.9, 0.5, 0.3], specular = 0.5, shininess = 20.0, smooth = true }}
+[[objects]]
+shape = "hypercube"
+transform = [{{ scale = 0.4 }}, {{ translate = [1.0, 0.8, 1.2] }}]
+[[objects]]
+shape = "hypercube"
+transform = [{{ scale = [3.0, 0.1, 3.0] }}, {{ translate = [0.0, -1.3, 0.0] }}]
+[render]
+samples = {samples}
+seed = 5
+shadows = true
+"#
+            );
+            let (_, any) = load_toml_str(&text, "test.toml", None).unwrap();
+            let AnyScene::D3(scene) = any else {
+                panic!("dim")
+            };
+            let retina = trace(&scene, &Progress::default()).unwrap();
+            let (mut lit, mut shadowed) = (0, 0);
+            for cell in 0..scene.camera.cell_count() {
+                let (color, covered, blocked) = one_ray_at_a_time(&scene, cell);
+                let inv = 1.0 / samples as f64;
+                for k in 0..3 {
+                    assert_eq!(
+                        retina.rgba[cell * 4 + k].to_bits(),
+                        ((color[k] * inv) as f32).to_bits(),
+                        "samples {samples}, cell {cell}, channel {k}"
+                    );
+                }
+                assert_eq!(retina.rgba[cell * 4 + 3], (covered as f64 * inv) as f32);
+                lit += (covered > 0) as usize;
+                shadowed += (blocked > 0) as usize;
+            }
+            assert!(
+                lit > 300 && shadowed > 50,
+                "{lit} cells hit, {shadowed} in shadow"
+            );
+        }
+    }
 
     #[test]
     fn latin_hypercube_offsets_stratify_every_axis() {
