@@ -47,6 +47,17 @@ fn retina_hash(r: &Retina) -> u64 {
     h.finish()
 }
 
+/// The least thread-CPU time of three runs of `f`.
+fn best_cpu_seconds(mut f: impl FnMut()) -> f64 {
+    (0..3)
+        .map(|_| {
+            let c0 = thread_seconds().unwrap_or(f64::NAN);
+            f();
+            thread_seconds().unwrap_or(f64::NAN) - c0
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// Closest-hit rates for the same rays in different orders (see the module docs).
 fn orders<const N: usize>(scene: &Scene<N>) {
     let cam = &scene.camera;
@@ -84,10 +95,8 @@ fn orders<const N: usize>(scene: &Scene<N>) {
         ("miss", vec![n; n]),
     ];
     for (name, order) in runs {
-        let mut best = f64::INFINITY;
         let mut hits = 0;
-        for _ in 0..3 {
-            let c0 = thread_seconds().unwrap_or(f64::NAN);
+        let best = best_cpu_seconds(|| {
             hits = order
                 .iter()
                 .filter(|&&i| {
@@ -97,8 +106,7 @@ fn orders<const N: usize>(scene: &Scene<N>) {
                     hit.is_some()
                 })
                 .count();
-            best = best.min(thread_seconds().unwrap_or(f64::NAN) - c0);
-        }
+        });
         println!(
             "{name:>12}: {hits} hits of {n}, {:.2} M closest-hit queries/s CPU",
             n as f64 / best / 1e6
@@ -108,36 +116,20 @@ fn orders<const N: usize>(scene: &Scene<N>) {
     // first light (a point light's position, or far along a directional light's direction).
     rays.truncate(n);
     let mut out = vec![None; n];
-    let mut best = f64::INFINITY;
-    for _ in 0..3 {
-        let c0 = thread_seconds().unwrap_or(f64::NAN);
-        scene
-            .bvh
-            .closest_hits(&rays, 0.0, f64::INFINITY, |_| true, &mut out);
-        best = best.min(thread_seconds().unwrap_or(f64::NAN) - c0);
-    }
-    let hits = out.iter().filter(|h| h.is_some()).count();
-    println!(
-        "{:>12}: {hits} hits of {n}, {:.2} M closest-hit queries/s CPU",
-        "packets",
-        n as f64 / best / 1e6
-    );
     // One packet (the 8 cells from the middle along u_1), over and over: everything cached.
     let same: Vec<Ray<N>> = (0..n).map(|i| rays[middle + i % 8]).collect();
-    let mut best = f64::INFINITY;
-    for _ in 0..3 {
-        let c0 = thread_seconds().unwrap_or(f64::NAN);
-        scene
-            .bvh
-            .closest_hits(&same, 0.0, f64::INFINITY, |_| true, &mut out);
-        best = best.min(thread_seconds().unwrap_or(f64::NAN) - c0);
+    for (name, rays) in [("packets", &rays), ("one packet", &same)] {
+        let best = best_cpu_seconds(|| {
+            scene
+                .bvh
+                .closest_hits(rays, 0.0, f64::INFINITY, |_| true, &mut out)
+        });
+        let hits = out.iter().filter(|h| h.is_some()).count();
+        println!(
+            "{name:>12}: {hits} hits of {n}, {:.2} M closest-hit queries/s CPU",
+            n as f64 / best / 1e6
+        );
     }
-    let hits = out.iter().filter(|h| h.is_some()).count();
-    println!(
-        "{:>12}: {hits} hits of {n}, {:.2} M closest-hit queries/s CPU",
-        "one packet",
-        n as f64 / best / 1e6
-    );
     let Some(light) = scene.lights.first() else {
         return;
     };
@@ -170,9 +162,7 @@ fn orders<const N: usize>(scene: &Scene<N>) {
     }
     let mut blocked = vec![false; shadow.len()];
     for (name, packets) in [("shadow rays", false), ("shadow packets", true)] {
-        let mut best = f64::INFINITY;
-        for _ in 0..3 {
-            let c0 = thread_seconds().unwrap_or(f64::NAN);
+        let best = best_cpu_seconds(|| {
             if packets {
                 scene
                     .bvh
@@ -182,8 +172,7 @@ fn orders<const N: usize>(scene: &Scene<N>) {
                     blocked[i] = scene.bvh.any_hit(r, 0.0, tmax[i], |_| true);
                 }
             }
-            best = best.min(thread_seconds().unwrap_or(f64::NAN) - c0);
-        }
+        });
         let count = blocked.iter().filter(|&&b| b).count();
         println!(
             "{name:>12}: {count} blocked of {}, {:.2} M any-hit queries/s CPU",

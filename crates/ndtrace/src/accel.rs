@@ -544,16 +544,24 @@ impl<const N: usize> RayPre<N> {
                 tf[l] = if c < tf[l] { c } else { tf[l] };
             }
         }
-        let mut mask = 0;
-        for l in 0..NW {
-            let met = tn[l] <= tf[l];
-            mask |= (met as u32) << l;
-            if !met {
-                tn[l] = f32::INFINITY;
-            }
-        }
-        (mask, tn)
+        slab_result(tn, &tf)
     }
+}
+
+/// The portable slab tests' result from the running entry and exit parameters of each box:
+/// the boxes met (entry ≤ exit), and their entries (+∞ for the boxes missed).
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+#[inline(always)]
+fn slab_result(mut tn: [f32; NW], tf: &[f32; NW]) -> (u32, [f32; NW]) {
+    let mut mask = 0;
+    for l in 0..NW {
+        let met = tn[l] <= tf[l];
+        mask |= (met as u32) << l;
+        if !met {
+            tn[l] = f32::INFINITY;
+        }
+    }
+    (mask, tn)
 }
 
 /// Result of a block test: bit mask of the lanes hit, and per lane t, `n̂·d` and
@@ -2005,15 +2013,7 @@ impl<const N: usize> Frustum<N> {
                 tf[l] = if c < tf[l] { c } else { tf[l] };
             }
         }
-        let mut mask = 0;
-        for l in 0..NW {
-            let met = tn[l] <= tf[l];
-            mask |= (met as u32) << l;
-            if !met {
-                tn[l] = f32::INFINITY;
-            }
-        }
-        (mask, tn)
+        slab_result(tn, &tf)
     }
 
     /// [`Frustum::slab`] in AVX2 registers (same results).
