@@ -43,8 +43,8 @@
 //! carries the bit set of the rays that met its box, and every ray keeps its own best hit and
 //! culling limit. When the rays share the sign of their direction on every axis (camera rays
 //! through neighbouring cells, shadow rays toward one light), one conservative *frustum* test
-//! of interval bounds stands in for the per-ray box tests of nodes whose children met are all
-//! inner nodes; each ray is tested on its own against the boxes of leaves. Since the leaf tests
+//! of interval bounds stands in for the per-ray box tests of nodes without leaf children; each
+//! ray is tested on its own against the boxes of leaves. Since the leaf tests
 //! are exact and box tests only ever over-approximate, every ray's result is the one it gets
 //! alone — the minimum of (t, id) over its accepted hits — whichever rays it travels with.
 //! The build is parallel (rayon) for large inputs and produces the same tree for any number of
@@ -1608,7 +1608,12 @@ impl<const N: usize> Bvh<N> {
         // Byte l of `by_child`: the rays that meet child l; `tn`: a lower bound of their entry.
         let (mask, tn, by_child) = 'test: {
             // The frustum stands in for two or more rays (one ray is cheaper tested alone).
-            if let (Some(f), true) = (&packet.frustum, rays & (rays - 1) != 0) {
+            // Nodes with leaf children test each ray on its own: leaves need exact ray masks.
+            let mut leaves = 0u32;
+            for (l, &c) in nd.child.iter().enumerate() {
+                leaves |= ((c >> 31) & u32::from(c != EMPTY)) << l;
+            }
+            if let (Some(f), true) = (&packet.frustum, rays & (rays - 1) != 0 && leaves == 0) {
                 let mut hi = f32::NEG_INFINITY;
                 for (q, &l) in limit.iter().enumerate() {
                     let l = if rays & (1 << q) != 0 {
@@ -1622,14 +1627,7 @@ impl<const N: usize> Bvh<N> {
                 if mask == 0 {
                     return (EMPTY, 0);
                 }
-                let mut leaves = 0u32;
-                for (l, &c) in nd.child.iter().enumerate() {
-                    leaves |= (c >> 31) << l;
-                }
-                // Inner children met go on with all the rays; leaves get each ray's own test.
-                if mask & leaves == 0 {
-                    break 'test (mask, tn, u64::from(rays) * 0x0101_0101_0101_0101);
-                }
+                break 'test (mask, tn, u64::from(rays) * 0x0101_0101_0101_0101);
             }
             let (met, tn) = slabs::<N, AVX, P>(&packet.pre, nd, rays, lo, limit);
             let mut any = met;
