@@ -39,14 +39,13 @@
 //! fixed-size stack and no heap allocation; [`Bvh::any_hit`] stops at the first accepted hit.
 //!
 //! Rays travel in packets of up to [`PACKET`] ([`Bvh::closest_hits`], [`Bvh::any_hits`]; the
-//! one-ray calls are packets of one): a node is fetched once for the packet, each stack entry
-//! carries the bit set of the rays that met its box, and every ray keeps its own best hit and
-//! culling limit. When the rays share the sign of their direction on every axis (camera rays
-//! through neighbouring cells, shadow rays toward one light), one conservative *frustum* test
-//! of interval bounds stands in for the per-ray box tests of nodes without leaf children; each
-//! ray is tested on its own against the boxes of leaves. Since the leaf tests
-//! are exact and box tests only ever over-approximate, every ray's result is the one it gets
-//! alone — the minimum of (t, id) over its accepted hits — whichever rays it travels with.
+//! one-ray calls are packets of one): a node is fetched, slab-tested for each ray of the packet
+//! that reached it, and sorted once for the packet; each stack entry carries the bit set of the
+//! rays that met its box (the masks of 8 rays × 8 children are transposed as an 8×8 bit
+//! matrix), and every ray keeps its own best hit and culling limit. A ray is tested only
+//! against the boxes its own tests led it to, and the leaf tests are exact, so every ray's
+//! result is the one it gets alone — the minimum of (t, id) over its accepted hits — whichever
+//! rays it travels with.
 //! The build is parallel (rayon) for large inputs and produces the same tree for any number of
 //! threads.
 
@@ -544,24 +543,16 @@ impl<const N: usize> RayPre<N> {
                 tf[l] = if c < tf[l] { c } else { tf[l] };
             }
         }
-        slab_result(tn, &tf)
-    }
-}
-
-/// The portable slab tests' result from the running entry and exit parameters of each box:
-/// the boxes met (entry ≤ exit), and their entries (+∞ for the boxes missed).
-#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
-#[inline(always)]
-fn slab_result(mut tn: [f32; NW], tf: &[f32; NW]) -> (u32, [f32; NW]) {
-    let mut mask = 0;
-    for l in 0..NW {
-        let met = tn[l] <= tf[l];
-        mask |= (met as u32) << l;
-        if !met {
-            tn[l] = f32::INFINITY;
+        let mut mask = 0;
+        for l in 0..NW {
+            let met = tn[l] <= tf[l];
+            mask |= (met as u32) << l;
+            if !met {
+                tn[l] = f32::INFINITY;
+            }
         }
+        (mask, tn)
     }
-    (mask, tn)
 }
 
 /// Result of a block test: bit mask of the lanes hit, and per lane t, `n̂·d` and
@@ -1589,8 +1580,7 @@ impl<const N: usize> Bvh<N> {
     /// Tests the children of inner node `cur` against the rays of the packet in the bit set
     /// `rays` (ray q against [lo, limit[q]]) and returns the nearest child met with the rays
     /// that met it (`EMPTY` if none), after pushing the other children met, farthest first (so
-    /// they are popped nearest first). A child's entry parameter is a lower bound of its rays'
-    /// entries (their smallest, or the frustum's bound).
+    /// they are popped nearest first). A child's entry parameter is the smallest among its rays.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn descend<const AVX: bool, const P: usize>(
@@ -1605,37 +1595,15 @@ impl<const N: usize> Bvh<N> {
     ) -> (u32, u32) {
         let nd = &self.nodes[cur as usize];
         stats::count(0);
-        // Byte l of `by_child`: the rays that meet child l; `tn`: a lower bound of their entry.
-        let (mask, tn, by_child) = 'test: {
-            // The frustum stands in for two or more rays (one ray is cheaper tested alone).
-            // Nodes with leaf children test each ray on its own: leaves need exact ray masks.
-            let mut leaves = 0u32;
-            for (l, &c) in nd.child.iter().enumerate() {
-                leaves |= ((c >> 31) & u32::from(c != EMPTY)) << l;
-            }
-            if let (Some(f), true) = (&packet.frustum, rays & (rays - 1) != 0 && leaves == 0) {
-                let mut hi = f32::NEG_INFINITY;
-                for (q, &l) in limit.iter().enumerate() {
-                    let l = if rays & (1 << q) != 0 {
-                        l
-                    } else {
-                        f32::NEG_INFINITY
-                    };
-                    hi = if l > hi { l } else { hi };
-                }
-                let (mask, tn) = f.slab::<AVX>(nd, lo, hi);
-                if mask == 0 {
-                    return (EMPTY, 0);
-                }
-                break 'test (mask, tn, u64::from(rays) * 0x0101_0101_0101_0101);
-            }
-            let (met, tn) = slabs::<N, AVX, P>(&packet.pre, nd, rays, lo, limit);
-            let mut any = met;
-            any |= any >> 32;
-            any |= any >> 16;
-            any |= any >> 8;
-            (((any & 0xff) as u32), tn, transpose8(met))
-        };
+        // Byte q of `met`: the children ray q meets; `tn`: the smallest entry per child.
+        let (met, tn) = slabs::<N, AVX, P>(&packet.pre, nd, rays, lo, limit);
+        let mut any = met;
+        any |= any >> 32;
+        any |= any >> 16;
+        any |= any >> 8;
+        let mask = (any & 0xff) as u32;
+        // Byte l of `by_child`: the rays that meet child l.
+        let by_child = transpose8(met);
         if mask == 0 {
             return (EMPTY, 0);
         }
@@ -1923,10 +1891,9 @@ unsafe fn slabs_avx2<const N: usize, const P: usize>(
     (met, out)
 }
 
-/// The rays of a packet, prepared for traversal, and their common frustum when they have one.
+/// The rays of a packet, prepared for traversal.
 struct Packet<const N: usize, const P: usize> {
     pre: [RayPre<N>; P],
-    frustum: Option<Frustum<N>>,
 }
 
 impl<const N: usize, const P: usize> Packet<N, P> {
@@ -1934,129 +1901,11 @@ impl<const N: usize, const P: usize> Packet<N, P> {
     /// traversal mask ever names them).
     #[inline(always)]
     fn new(rays: &[Ray<N>], reach: f64) -> Self {
-        let k = rays.len();
         let mut pre = [RayPre::new(&rays[0], reach); P];
         for (p, ray) in pre.iter_mut().zip(rays).skip(1) {
             *p = RayPre::new(ray, reach);
         }
-        let frustum = if k > 1 { Frustum::new(&pre[..k]) } else { None };
-        Packet { pre, frustum }
-    }
-}
-
-/// Interval bounds of the slab data of a packet's rays, for one conservative box test on
-/// behalf of all of them: per axis the rays share the sign of their direction (so the same
-/// plane is the near one), and the moved origins and `1/d` lie in `[lo, hi]` ranges. Each
-/// ray's computed entry `fl(fl(b − o')·inv)` is then at least the smallest of the four corner
-/// products `fl(fl(b − o'_hi|lo)·inv_lo|hi)` (rounding is monotone), and its exit at most the
-/// largest, so a box the frustum misses is missed by every ray of the packet.
-struct Frustum<const N: usize> {
-    near: [usize; N],
-    o_near: [[f32; 2]; N],
-    o_far: [[f32; 2]; N],
-    inv: [[f32; 2]; N],
-}
-
-impl<const N: usize> Frustum<N> {
-    /// `None` when the rays do not share a direction sign on every axis, or a `1/d` is zero or
-    /// infinite (the per-ray test then handles every node).
-    #[inline(always)]
-    fn new(pre: &[RayPre<N>]) -> Option<Self> {
-        let p0 = &pre[0];
-        let mut f = Frustum {
-            near: p0.near,
-            o_near: std::array::from_fn(|i| [p0.o_near[i]; 2]),
-            o_far: std::array::from_fn(|i| [p0.o_far[i]; 2]),
-            inv: std::array::from_fn(|i| [p0.inv[i]; 2]),
-        };
-        let mut usable = true;
-        for p in pre {
-            for i in 0..N {
-                usable &= p.near[i] == f.near[i] && p.inv[i].is_finite() && p.inv[i] != 0.0;
-                let grow = |r: &mut [f32; 2], v: f32| *r = [r[0].min(v), r[1].max(v)];
-                grow(&mut f.o_near[i], p.o_near[i]);
-                grow(&mut f.o_far[i], p.o_far[i]);
-                grow(&mut f.inv[i], p.inv[i]);
-            }
-        }
-        usable.then_some(f)
-    }
-
-    /// The frustum's slab test of the children of `node` against [lo, hi]: the children that
-    /// some ray may meet, and a lower bound of their entry parameters (+∞ for the others).
-    #[inline(always)]
-    fn slab<const AVX: bool>(&self, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
-        #[cfg(target_arch = "x86_64")]
-        if AVX && NW == 8 {
-            // SAFETY: `AVX` is only true in code running after an AVX2 check.
-            return unsafe { self.slab_avx2(node, lo, hi) };
-        }
-        let mut tn = [lo; NW];
-        let mut tf = [hi; NW];
-        for i in 0..N {
-            let s = self.near[i] & 1;
-            let [il, ih] = self.inv[i];
-            for l in 0..NW {
-                let (zl, zh) = (
-                    node.b[s][i][l] - self.o_near[i][1],
-                    node.b[s][i][l] - self.o_near[i][0],
-                );
-                let a = (zl * il).min(zl * ih).min(zh * il).min(zh * ih);
-                let (fl, fh) = (
-                    node.b[s ^ 1][i][l] - self.o_far[i][1],
-                    node.b[s ^ 1][i][l] - self.o_far[i][0],
-                );
-                let c = (fl * il).max(fl * ih).max(fh * il).max(fh * ih);
-                tn[l] = if a > tn[l] { a } else { tn[l] };
-                tf[l] = if c < tf[l] { c } else { tf[l] };
-            }
-        }
-        slab_result(tn, &tf)
-    }
-
-    /// [`Frustum::slab`] in AVX2 registers (same results).
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn slab_avx2(&self, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
-        use std::arch::x86_64::*;
-        let ld = |a: &[f32; NW]| _mm256_loadu_ps(a.as_ptr());
-        let mut near = _mm256_set1_ps(lo);
-        let mut far = _mm256_set1_ps(hi);
-        for i in 0..N {
-            let s = self.near[i] & 1;
-            let (il, ih) = (
-                _mm256_set1_ps(self.inv[i][0]),
-                _mm256_set1_ps(self.inv[i][1]),
-            );
-            let corners = |b: __m256, o: [f32; 2]| {
-                let zl = _mm256_sub_ps(b, _mm256_set1_ps(o[1]));
-                let zh = _mm256_sub_ps(b, _mm256_set1_ps(o[0]));
-                let p = [
-                    _mm256_mul_ps(zl, il),
-                    _mm256_mul_ps(zl, ih),
-                    _mm256_mul_ps(zh, il),
-                    _mm256_mul_ps(zh, ih),
-                ];
-                (p[0], p[1], p[2], p[3])
-            };
-            let (a0, a1, a2, a3) = corners(ld(&node.b[s][i]), self.o_near[i]);
-            let a = _mm256_min_ps(_mm256_min_ps(a0, a1), _mm256_min_ps(a2, a3));
-            let (c0, c1, c2, c3) = corners(ld(&node.b[s ^ 1][i]), self.o_far[i]);
-            let c = _mm256_max_ps(_mm256_max_ps(c0, c1), _mm256_max_ps(c2, c3));
-            near = _mm256_max_ps(a, near);
-            far = _mm256_min_ps(c, far);
-        }
-        let met = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
-        let mut out = [0.0f32; NW];
-        _mm256_storeu_ps(
-            out.as_mut_ptr(),
-            _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), near, met),
-        );
-        (_mm256_movemask_ps(met) as u32, out)
+        Packet { pre }
     }
 }
 
@@ -2360,9 +2209,8 @@ mod tests {
     }
 
     /// Rays for packet tests, of kind `kind`: 0 a pinhole (one origin, directions fanned
-    /// around an aim at a simplex: frustum on), 1 shadow-like (spread origins aimed near one
-    /// point: frustum on), 2 random (mixed signs: frustum off), 3 like 0 with one direction
-    /// component exactly zero in every ray (frustum off).
+    /// around an aim at a simplex), 1 shadow-like (spread origins aimed near one point), 2
+    /// random, 3 like 0 with one direction component exactly zero in every ray.
     fn packet_rays<const N: usize>(
         r: &mut TestRng,
         s: &[([[f64; N]; N], u32)],
@@ -2404,15 +2252,11 @@ mod tests {
         let s = soup::<N>(&mut r, 300);
         let prims = prepare(&s);
         let bvh = build_soup(&s, PAR_MIN);
-        let (mut hits, mut frusta) = (0, [0usize; 2]);
+        let mut hits = 0;
         for case in 0..400 {
             let kind = case % 4;
             let count = 1 + case % 11;
             let rays = packet_rays(&mut r, &s, kind, count);
-            for chunk in rays.chunks(PACKET) {
-                let pre: Vec<RayPre<N>> = chunk.iter().map(|ray| RayPre::new(ray, 1.0)).collect();
-                frusta[Frustum::new(&pre).is_some() as usize] += 1;
-            }
             let (tmin, tmax) = [(0.0, f64::INFINITY), (0.2, 1.0)][case % 2];
             let tmaxes: Vec<f64> = (0..count).map(|_| r.random_range(0.1..2.0)).collect();
             let filters: [&dyn Fn(u32) -> bool; 2] = [&|_| true, &|id| id % 3 != 0];
@@ -2448,71 +2292,11 @@ mod tests {
             }
         }
         assert!(hits > 250, "N={N}: only {hits} hits");
-        assert!(
-            frusta[0] > 50 && frusta[1] > 50,
-            "N={N}: packets without/with frustum {frusta:?}"
-        );
     }
 
     #[test]
     fn accel_packets_equal_brute_force_ray_by_ray() {
         for_each_dim!(packets_agree_with_brute_force);
-    }
-
-    /// Whatever a ray of the packet meets, its frustum meets, no later than the ray enters.
-    fn frustum_is_conservative<const N: usize>() {
-        let mut r = rng(2600 + N as u64);
-        let s = soup::<N>(&mut r, 40);
-        let mut checked = 0;
-        for case in 0..600 {
-            let rays = packet_rays(&mut r, &s, case % 2, 2 + case % 7);
-            let pre: Vec<RayPre<N>> = rays.iter().map(|ray| RayPre::new(ray, 4.0)).collect();
-            let Some(f) = Frustum::new(&pre) else {
-                continue;
-            };
-            let mut node = Node::<N>::EMPTY;
-            for l in 0..NW - case % 3 {
-                // Boxes near the rays, so that many are met.
-                let ray = &rays[r.random_range(0..rays.len())];
-                let c = add(
-                    &ray.at(r.random_range(0.0..1.2)),
-                    &random_vector::<N>(&mut r, 0.4),
-                );
-                for i in 0..N {
-                    let h = r.random_range(0.0..0.6);
-                    node.b[0][i][l] = f32_down(c[i] - h);
-                    node.b[1][i][l] = f32_up(c[i] + h);
-                }
-            }
-            let (lo, hi) = (0.0, [f32::INFINITY, 1.5][case % 2]);
-            for avx in [false, true] {
-                let (fm, ft) = if avx && std::is_x86_feature_detected!("avx2") {
-                    f.slab::<true>(&node, lo, hi)
-                } else {
-                    f.slab::<false>(&node, lo, hi)
-                };
-                for p in &pre {
-                    let (m, t) = p.slab(&node, lo, hi);
-                    assert_eq!(
-                        m & !fm,
-                        0,
-                        "N={N} case {case}: a ray meets a box its frustum misses"
-                    );
-                    for l in 0..NW {
-                        if m & (1 << l) != 0 {
-                            assert!(ft[l] <= t[l], "N={N} case {case}: frustum enters later");
-                            checked += 1;
-                        }
-                    }
-                }
-            }
-        }
-        assert!(checked > 500, "N={N}: {checked}");
-    }
-
-    #[test]
-    fn accel_frustum_test_is_conservative() {
-        for_each_dim!(frustum_is_conservative);
     }
 
     #[test]
