@@ -293,6 +293,7 @@ fn shading_normal<const N: usize>(
 
 /// The per-group buffers of a trace: the camera rays of a group of cells, their hits, and the
 /// shadow rays their shading asks for, each traced as packets.
+#[derive(Default)]
 struct Work<const N: usize> {
     rays: Vec<Ray<N>>,
     hits: Vec<Option<Hit<N>>>,
@@ -308,22 +309,6 @@ struct Work<const N: usize> {
     blocked: Vec<bool>,
     /// (light, term, shadow ray, tmax) as shading asks for them.
     requests: Vec<(usize, usize, Ray<N>, f64)>,
-}
-
-impl<const N: usize> Default for Work<N> {
-    fn default() -> Self {
-        Work {
-            rays: Vec::new(),
-            hits: Vec::new(),
-            shaded: Vec::new(),
-            terms: Vec::new(),
-            shadow: Vec::new(),
-            shadow_rays: Vec::new(),
-            shadow_tmax: Vec::new(),
-            blocked: Vec::new(),
-            requests: Vec::new(),
-        }
-    }
 }
 
 impl<const N: usize> Work<N> {
