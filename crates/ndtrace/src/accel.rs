@@ -1596,7 +1596,7 @@ impl<const N: usize> Bvh<N> {
         let nd = &self.nodes[cur as usize];
         stats::count(0);
         // Byte q of `met`: the children ray q meets; `tn`: the smallest entry per child.
-        let (met, tn) = slabs::<N, AVX, P>(&packet.pre, nd, rays, lo, limit);
+        let (met, tn) = slabs::<N, AVX, P>(packet, nd, rays, lo, limit);
         let mut any = met;
         any |= any >> 32;
         any |= any >> 16;
@@ -1643,7 +1643,7 @@ impl<const N: usize> Bvh<N> {
     /// Pops the next stack entry that still has rays within reach (ray q keeps an entry whose
     /// parameter is ≤ `limit[q]`, restricted to `alive`), or `None` when the stack is empty.
     #[inline(always)]
-    fn pop<const P: usize>(
+    fn pop<const AVX: bool, const P: usize>(
         stack: &[MaybeUninit<Entry>; STACK_SIZE],
         sp: &mut usize,
         limit: &[f32; P],
@@ -1653,10 +1653,7 @@ impl<const N: usize> Bvh<N> {
             *sp -= 1;
             // SAFETY: the entries below `sp` were all written by `descend`.
             let e = unsafe { stack[*sp].assume_init() };
-            let mut near = 0u32;
-            for (q, &l) in limit.iter().enumerate() {
-                near |= u32::from(e.t <= l) << q;
-            }
+            let near = within::<AVX, P>(e.t, limit);
             let rays = e.rays & near & alive;
             if rays != 0 {
                 return Some((e.node, rays));
@@ -1729,7 +1726,7 @@ impl<const N: usize> Bvh<N> {
                 }
             }
             // Pop the next subtree whose entry parameter is still within reach of a ray.
-            match Self::pop::<P>(&stack, &mut sp, &limit, u32::MAX) {
+            match Self::pop::<AVX, P>(&stack, &mut sp, &limit, u32::MAX) {
                 Some(next) => (cur, cur_rays) = next,
                 None => break,
             }
@@ -1796,7 +1793,7 @@ impl<const N: usize> Bvh<N> {
                     }
                 }
             }
-            match Self::pop::<P>(&stack, &mut sp, &limit, alive) {
+            match Self::pop::<AVX, P>(&stack, &mut sp, &limit, alive) {
                 Some(next) => (cur, cur_rays) = next,
                 None => break,
             }
@@ -1809,7 +1806,7 @@ impl<const N: usize> Bvh<N> {
 /// second the smallest entry parameter per child (+∞ for a child no ray meets).
 #[inline(always)]
 fn slabs<const N: usize, const AVX: bool, const P: usize>(
-    pre: &[RayPre<N>; P],
+    packet: &Packet<N, P>,
     node: &Node<N>,
     rays: u32,
     lo: f32,
@@ -1818,8 +1815,9 @@ fn slabs<const N: usize, const AVX: bool, const P: usize>(
     #[cfg(target_arch = "x86_64")]
     if AVX && NW == 8 {
         // SAFETY: `AVX` is only true in code running after an AVX2 check.
-        return unsafe { slabs_avx2(pre, node, rays, lo, limit) };
+        return unsafe { slabs_avx2(packet, node, rays, lo, limit) };
     }
+    let pre = &packet.pre;
     let mut met = 0u64;
     let mut tn = [f32::INFINITY; NW];
     let mut left = rays;
@@ -1837,7 +1835,8 @@ fn slabs<const N: usize, const AVX: bool, const P: usize>(
     (met, tn)
 }
 
-/// [`slabs`] with each ray's test in AVX2 registers (the node's boxes loaded once).
+/// [`slabs`] with each ray's test in AVX2 registers (the node's boxes loaded once; when every
+/// ray of the packet has the same direction signs, its near and far planes are picked once).
 ///
 /// # Safety
 /// The CPU must support AVX2.
@@ -1845,7 +1844,7 @@ fn slabs<const N: usize, const AVX: bool, const P: usize>(
 #[target_feature(enable = "avx2")]
 #[inline]
 unsafe fn slabs_avx2<const N: usize, const P: usize>(
-    pre: &[RayPre<N>; P],
+    packet: &Packet<N, P>,
     node: &Node<N>,
     rays: u32,
     lo: f32,
@@ -1853,23 +1852,20 @@ unsafe fn slabs_avx2<const N: usize, const P: usize>(
 ) -> (u64, [f32; NW]) {
     use std::arch::x86_64::*;
     let ld = |a: &[f32; NW]| _mm256_loadu_ps(a.as_ptr());
-    let b: [[__m256; N]; 2] = std::array::from_fn(|s| std::array::from_fn(|i| ld(&node.b[s][i])));
     let inf = _mm256_set1_ps(f32::INFINITY);
     let mut tn = inf;
     let mut met = 0u64;
     let mut left = rays;
-    while left != 0 {
-        let q = left.trailing_zeros() as usize;
-        left &= left - 1;
+    // Ray q against the planes `bn` (entered) and `bf` (left) of each slab.
+    let mut test = |q: usize, bn: &[__m256; N], bf: &[__m256; N]| {
         stats::count(2);
-        let p = &pre[q];
+        let p = &packet.pre[q];
         let mut near = [_mm256_set1_ps(lo); N];
         let mut far = [_mm256_set1_ps(limit[q]); N];
         for i in 0..N {
-            let s = p.near[i] & 1;
             let inv = _mm256_set1_ps(p.inv[i]);
-            let a = _mm256_mul_ps(_mm256_sub_ps(b[s][i], _mm256_set1_ps(p.o_near[i])), inv);
-            let c = _mm256_mul_ps(_mm256_sub_ps(b[s ^ 1][i], _mm256_set1_ps(p.o_far[i])), inv);
+            let a = _mm256_mul_ps(_mm256_sub_ps(bn[i], _mm256_set1_ps(p.o_near[i])), inv);
+            let c = _mm256_mul_ps(_mm256_sub_ps(bf[i], _mm256_set1_ps(p.o_far[i])), inv);
             near[i] = _mm256_max_ps(a, near[i]);
             far[i] = _mm256_min_ps(c, far[i]);
         }
@@ -1885,15 +1881,64 @@ unsafe fn slabs_avx2<const N: usize, const P: usize>(
         let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near[0], far[0]);
         met |= (_mm256_movemask_ps(hit) as u64) << (8 * q);
         tn = _mm256_min_ps(tn, _mm256_blendv_ps(inf, near[0], hit));
+    };
+    if let Some(side) = &packet.octant {
+        let bn: [__m256; N] = std::array::from_fn(|i| ld(&node.b[side[i]][i]));
+        let bf: [__m256; N] = std::array::from_fn(|i| ld(&node.b[side[i] ^ 1][i]));
+        while left != 0 {
+            let q = left.trailing_zeros() as usize;
+            left &= left - 1;
+            test(q, &bn, &bf);
+        }
+    } else {
+        let b: [[__m256; N]; 2] =
+            std::array::from_fn(|s| std::array::from_fn(|i| ld(&node.b[s][i])));
+        while left != 0 {
+            let q = left.trailing_zeros() as usize;
+            left &= left - 1;
+            let side = &packet.pre[q].near;
+            test(
+                q,
+                &std::array::from_fn(|i| b[side[i] & 1][i]),
+                &std::array::from_fn(|i| b[(side[i] & 1) ^ 1][i]),
+            );
+        }
     }
     let mut out = [0.0f32; NW];
     _mm256_storeu_ps(out.as_mut_ptr(), tn);
     (met, out)
 }
 
+/// The bit set of the rays q with `t ≤ limit[q]`.
+#[inline(always)]
+fn within<const AVX: bool, const P: usize>(t: f32, limit: &[f32; P]) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    if AVX && P == 8 {
+        use std::arch::x86_64::*;
+        /// # Safety
+        /// The CPU must support AVX2.
+        #[target_feature(enable = "avx2")]
+        #[inline]
+        unsafe fn within8(t: f32, limit: *const f32) -> u32 {
+            // SAFETY: the caller passes 8 valid f32 (unaligned load).
+            let l = unsafe { _mm256_loadu_ps(limit) };
+            _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(_mm256_set1_ps(t), l)) as u32
+        }
+        // SAFETY: `AVX` is only true in code running after an AVX2 check; P == 8.
+        return unsafe { within8(t, limit.as_ptr()) };
+    }
+    let mut near = 0u32;
+    for (q, &l) in limit.iter().enumerate() {
+        near |= u32::from(t <= l) << q;
+    }
+    near
+}
+
 /// The rays of a packet, prepared for traversal.
 struct Packet<const N: usize, const P: usize> {
     pre: [RayPre<N>; P],
+    /// The rays' common [`RayPre::near`] sides, when they all have the same.
+    octant: Option<[usize; N]>,
 }
 
 impl<const N: usize, const P: usize> Packet<N, P> {
@@ -1905,7 +1950,8 @@ impl<const N: usize, const P: usize> Packet<N, P> {
         for (p, ray) in pre.iter_mut().zip(rays).skip(1) {
             *p = RayPre::new(ray, reach);
         }
-        Packet { pre }
+        let octant = pre.iter().all(|p| p.near == pre[0].near).then_some(pre[0].near);
+        Packet { pre, octant }
     }
 }
 
@@ -2513,7 +2559,11 @@ mod tests {
             #[cfg(target_arch = "x86_64")]
             if std::is_x86_feature_detected!("avx2") {
                 // SAFETY: AVX2 is available.
-                let (m2, t2) = unsafe { slabs_avx2(&[pre], &node, 1, 0.0, &[f32::INFINITY]) };
+                let packet = Packet::<3, 1> {
+                    pre: [pre],
+                    octant: None,
+                };
+                let (m2, t2) = unsafe { slabs_avx2(&packet, &node, 1, 0.0, &[f32::INFINITY]) };
                 assert_eq!(
                     (mask as u64, tn.map(f32::to_bits)),
                     (m2, t2.map(f32::to_bits))

@@ -118,11 +118,12 @@ impl<const N: usize> Camera<N> {
     }
 
     /// Depth of a hit at ray parameter t: Euclidean distance from the camera position
-    /// (perspective) or from the image plane along the view direction (orthographic).
+    /// (perspective) or from the image plane along the view direction (orthographic), for a ray
+    /// whose direction has length `dir_len`.
     #[inline]
-    pub fn depth(&self, ray: &Ray<N>, t: f64) -> f64 {
+    pub fn depth(&self, t: f64, dir_len: f64) -> f64 {
         match self.projection {
-            Projection::Perspective => t * norm(&ray.dir),
+            Projection::Perspective => t * dir_len,
             Projection::Orthographic => t,
         }
     }

@@ -338,24 +338,25 @@ impl<const N: usize> Work<N> {
             };
             let (obj, local) = scene.locate(hit.prim);
             let n = shading_normal(scene, hit, obj, local, ray);
+            let dir_len = norm(&ray.dir);
+            let depth = cam.depth(hit.t, dir_len);
             let c = match scene.render.mode {
                 RenderMode::Shaded => {
                     let m = &scene.objects[obj].material;
-                    for (l, color, shadow) in light_terms(scene, ray, hit, obj, &n) {
+                    light_terms(scene, ray, dir_len, hit, obj, &n, |l, color, shadow| {
                         if let Some((sray, tmax)) = shadow {
                             requests.push((l, self.terms.len(), sray, tmax));
                         }
                         // Set to the shadow ray's index once the rays are in light order.
                         self.shadow.push(None);
                         self.terms.push((r, color));
-                    }
+                    });
                     std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k])
                 }
                 RenderMode::Depth => {
-                    let d = cam.depth(ray, hit.t);
                     let g = 1.0
                         - 0.8
-                            * ((d - depth_range.0) / (depth_range.1 - depth_range.0))
+                            * ((depth - depth_range.0) / (depth_range.1 - depth_range.0))
                                 .clamp(0.0, 1.0);
                     [g; 3]
                 }
@@ -368,7 +369,7 @@ impl<const N: usize> Work<N> {
                 }
             };
             let nearest = NearestHit {
-                depth: cam.depth(ray, hit.t),
+                depth,
                 normal: n,
                 object: obj as i32,
                 primitive: local as i64,
@@ -377,7 +378,9 @@ impl<const N: usize> Work<N> {
         }
         if !requests.is_empty() {
             // Light order, so that each packet holds rays toward one light.
-            requests.sort_by_key(|q| q.0);
+            if scene.lights.len() > 1 {
+                requests.sort_by_key(|q| q.0);
+            }
             self.shadow_rays.clear();
             self.shadow_tmax.clear();
             for (i, &(_, term, sray, tmax)) in requests.iter().enumerate() {
@@ -410,72 +413,72 @@ impl<const N: usize> Work<N> {
     }
 }
 
-/// N-D Lambert + Blinn–Phong (course notes Part II(B)): per light that faces the surface, its
-/// index, its colour contribution and the shadow ray (with its tmax) that decides whether it
-/// counts. The
-/// intensity of a light is the dot product of the unit normal with the unit vector toward it,
-/// clamped at 0 (lights behind the surface contribute nothing and need no shadow ray).
-fn light_terms<'a, const N: usize>(
-    scene: &'a Scene<N>,
+/// N-D Lambert + Blinn–Phong (course notes Part II(B)): calls `emit` per light that faces the
+/// surface, in light order, with its index, its colour contribution and the shadow ray (with
+/// its tmax) that decides whether it counts. The intensity of a light is the dot product of the
+/// unit normal with the unit vector toward it, clamped at 0 (lights behind the surface
+/// contribute nothing and need no shadow ray). `dir_len` is |ray.dir|.
+#[inline(always)]
+fn light_terms<const N: usize>(
+    scene: &Scene<N>,
     ray: &Ray<N>,
+    dir_len: f64,
     hit: &Hit<N>,
     obj: usize,
     n: &Vector<N>,
-) -> impl Iterator<Item = (usize, [f64; 3], Option<(Ray<N>, f64)>)> + 'a {
+    mut emit: impl FnMut(usize, [f64; 3], Option<(Ray<N>, f64)>),
+) {
     let m = &scene.objects[obj].material;
     let x = add_scaled(&ray.origin, hit.t, &ray.dir);
-    let v = scale(&ray.dir, -1.0 / norm(&ray.dir));
+    let specular = m.specular.iter().any(|&s| s > 0.0);
     let flat = scene.flat_normals[hit.prim as usize];
     let eps = 1e-7 * scene.extent;
-    let n = *n;
-    scene
-        .lights
-        .iter()
-        .enumerate()
-        .filter_map(move |(index, light)| {
-            let (l, dist, color, atten) = match light {
-                Light::Directional { direction, color } => (*direction, f64::INFINITY, color, 1.0),
-                Light::Point {
-                    position,
-                    color,
-                    falloff,
-                } => {
-                    let d = sub(position, &x);
-                    let dist = norm(&d);
-                    if !(dist > 0.0) {
-                        return None;
-                    }
-                    let atten = if *falloff == 0.0 {
-                        1.0
-                    } else {
-                        dist.powf(-falloff)
-                    };
-                    (scale(&d, 1.0 / dist), dist, color, atten)
+    for (index, light) in scene.lights.iter().enumerate() {
+        let (l, dist, color, atten) = match light {
+            Light::Directional { direction, color } => (*direction, f64::INFINITY, color, 1.0),
+            Light::Point {
+                position,
+                color,
+                falloff,
+            } => {
+                let d = sub(position, &x);
+                let dist = norm(&d);
+                if !(dist > 0.0) {
+                    continue;
                 }
-            };
-            let ndl = dot(&n, &l);
-            if ndl <= 0.0 {
-                return None;
+                let atten = if *falloff == 0.0 {
+                    1.0
+                } else {
+                    dist.powf(-falloff)
+                };
+                (scale(&d, 1.0 / dist), dist, color, atten)
             }
-            let shadow = scene.render.shadows.then(|| {
-                // Leave the surface on the light's side of the simplex's hyperplane.
-                let side = if dot(&flat, &l) >= 0.0 { eps } else { -eps };
-                let origin = add_scaled(&x, side, &flat);
-                (Ray { origin, dir: l }, dist - eps)
-            });
-            let spec = if m.specular.iter().any(|&s| s > 0.0) {
-                let s = add_scaled(&l, 1.0, &v);
-                let len = norm(&s);
-                let h = if len > 0.0 { scale(&s, 1.0 / len) } else { l };
-                dot(&n, &h).max(0.0).powf(m.shininess)
-            } else {
-                0.0
-            };
-            let c = std::array::from_fn(|k| {
-                atten * color[k] * (m.diffuse[k] * m.color[k] * ndl + m.specular[k] * spec)
-            });
-            Some((index, c, shadow))
-        })
+        };
+        let ndl = dot(n, &l);
+        if ndl <= 0.0 {
+            continue;
+        }
+        let shadow = scene.render.shadows.then(|| {
+            // Leave the surface on the light's side of the simplex's hyperplane.
+            let side = if dot(&flat, &l) >= 0.0 { eps } else { -eps };
+            let origin = add_scaled(&x, side, &flat);
+            (Ray { origin, dir: l }, dist - eps)
+        });
+        let spec = if specular {
+            // Half vector of the light and the unit vector toward the viewer.
+            let v = scale(&ray.dir, -1.0 / dir_len);
+            let s = add_scaled(&l, 1.0, &v);
+            let len = norm(&s);
+            let h = if len > 0.0 { scale(&s, 1.0 / len) } else { l };
+            dot(n, &h).max(0.0).powf(m.shininess)
+        } else {
+            0.0
+        };
+        let c = std::array::from_fn(|k| {
+            atten * color[k] * (m.diffuse[k] * m.color[k] * ndl + m.specular[k] * spec)
+        });
+        emit(index, c, shadow);
+    }
 }
 
 #[cfg(test)]
@@ -509,15 +512,16 @@ mod tests {
             let m = &scene.objects[obj].material;
             let mut c: [f64; 3] =
                 std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k]);
-            for (_, term, shadow) in light_terms(scene, &ray, &hit, obj, &n) {
+            let dir_len = norm(&ray.dir);
+            light_terms(scene, &ray, dir_len, &hit, obj, &n, |_, term, shadow| {
                 if shadow.is_some_and(|(s, tmax)| scene.bvh.any_hit(&s, 0.0, tmax, |_| true)) {
                     blocked += 1;
-                    continue;
+                    return;
                 }
                 for k in 0..3 {
                     c[k] += term[k];
                 }
-            }
+            });
             for k in 0..3 {
                 color[k] += c[k];
             }
