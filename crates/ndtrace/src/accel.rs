@@ -1950,7 +1950,10 @@ impl<const N: usize, const P: usize> Packet<N, P> {
         for (p, ray) in pre.iter_mut().zip(rays).skip(1) {
             *p = RayPre::new(ray, reach);
         }
-        let octant = pre.iter().all(|p| p.near == pre[0].near).then_some(pre[0].near);
+        let octant = pre
+            .iter()
+            .all(|p| p.near == pre[0].near)
+            .then_some(pre[0].near);
         Packet { pre, octant }
     }
 }
@@ -2299,10 +2302,16 @@ mod tests {
         let prims = prepare(&s);
         let bvh = build_soup(&s, PAR_MIN);
         let mut hits = 0;
+        // Packets of one octant (slab planes picked once per node) and of mixed octants.
+        let mut octants = [0; 2];
         for case in 0..400 {
             let kind = case % 4;
             let count = 1 + case % 11;
             let rays = packet_rays(&mut r, &s, kind, count);
+            for rs in rays.chunks(PACKET) {
+                let packet = Packet::<N, PACKET>::new(rs, bvh.reach);
+                octants[usize::from(packet.octant.is_some())] += 1;
+            }
             let (tmin, tmax) = [(0.0, f64::INFINITY), (0.2, 1.0)][case % 2];
             let tmaxes: Vec<f64> = (0..count).map(|_| r.random_range(0.1..2.0)).collect();
             let filters: [&dyn Fn(u32) -> bool; 2] = [&|_| true, &|id| id % 3 != 0];
@@ -2338,6 +2347,10 @@ mod tests {
             }
         }
         assert!(hits > 250, "N={N}: only {hits} hits");
+        assert!(
+            octants.iter().all(|&c| c > 50),
+            "N={N}: packets of mixed and of one octant: {octants:?}"
+        );
     }
 
     #[test]

@@ -86,9 +86,10 @@ impl<const N: usize> Camera<N> {
     /// [`Camera::retina_point`] of the cell with multi-index `idx` (see [`Camera::cell_index`]).
     #[inline]
     pub fn cell_point(&self, idx: &[usize], f: &[f64], u: &mut [f64]) {
+        // Through i64: one signed conversion instruction (the values are far below 2⁶³).
         for k in 0..N - 1 {
-            let half = self.resolution[k] as f64 / 2.0;
-            let i = idx[k] as f64;
+            let half = self.resolution[k] as i64 as f64 / 2.0;
+            let i = idx[k] as i64 as f64;
             u[k] = if k == 1 {
                 (half - i - f[k]) * self.cell
             } else {
