@@ -1602,11 +1602,11 @@ impl<const N: usize> Bvh<N> {
         any |= any >> 16;
         any |= any >> 8;
         let mask = (any & 0xff) as u32;
-        // Byte l of `by_child`: the rays that meet child l.
-        let by_child = transpose8(met);
         if mask == 0 {
             return (EMPTY, 0);
         }
+        // Byte l of `by_child`: the rays that meet child l.
+        let by_child = transpose8(met);
         let rays_of = |l: usize| ((by_child >> (8 * l)) & 0xff) as u32;
         if mask & (mask - 1) == 0 {
             let l = mask.trailing_zeros() as usize;

@@ -292,6 +292,7 @@ fn id_color(id: u32) -> [f64; 3] {
 
 /// The unit shading normal: flat (eq. 6) or interpolated from vertex normals with the hit's
 /// barycentric coordinates; turned toward the viewer for two-sided lighting.
+#[inline(always)]
 fn shading_normal<const N: usize>(
     scene: &Scene<N>,
     hit: &Hit<N>,
