@@ -1883,8 +1883,8 @@ unsafe fn slabs_avx2<const N: usize, const P: usize>(
         tn = _mm256_min_ps(tn, _mm256_blendv_ps(inf, near[0], hit));
     };
     if let Some(side) = &packet.octant {
-        let bn: [__m256; N] = std::array::from_fn(|i| ld(&node.b[side[i]][i]));
-        let bf: [__m256; N] = std::array::from_fn(|i| ld(&node.b[side[i] ^ 1][i]));
+        let bn: [__m256; N] = std::array::from_fn(|i| ld(&node.b[side[i] & 1][i]));
+        let bf: [__m256; N] = std::array::from_fn(|i| ld(&node.b[(side[i] & 1) ^ 1][i]));
         while left != 0 {
             let q = left.trailing_zeros() as usize;
             left &= left - 1;
@@ -1938,6 +1938,7 @@ fn within<const AVX: bool, const P: usize>(t: f32, limit: &[f32; P]) -> u32 {
 struct Packet<const N: usize, const P: usize> {
     pre: [RayPre<N>; P],
     /// The rays' common [`RayPre::near`] sides, when they all have the same.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     octant: Option<[usize; N]>,
 }
 
@@ -2572,15 +2573,15 @@ mod tests {
             #[cfg(target_arch = "x86_64")]
             if std::is_x86_feature_detected!("avx2") {
                 // SAFETY: AVX2 is available.
-                let packet = Packet::<3, 1> {
-                    pre: [pre],
-                    octant: None,
-                };
-                let (m2, t2) = unsafe { slabs_avx2(&packet, &node, 1, 0.0, &[f32::INFINITY]) };
-                assert_eq!(
-                    (mask as u64, tn.map(f32::to_bits)),
-                    (m2, t2.map(f32::to_bits))
-                );
+                // Planes picked per ray and once per packet.
+                for octant in [None, Some(pre.near)] {
+                    let packet = Packet::<3, 1> { pre: [pre], octant };
+                    let (m2, t2) = unsafe { slabs_avx2(&packet, &node, 1, 0.0, &[f32::INFINITY]) };
+                    assert_eq!(
+                        (mask as u64, tn.map(f32::to_bits)),
+                        (m2, t2.map(f32::to_bits))
+                    );
+                }
             }
             mask
         };

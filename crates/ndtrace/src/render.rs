@@ -138,11 +138,6 @@ where
     let mut normal = vec![0f32; cells * N];
     let mut object_id = vec![0i32; cells];
     let mut primitive_id = vec![0i64; cells];
-    huge_pages(&rgba);
-    huge_pages(&depth);
-    huge_pages(&normal);
-    huge_pages(&object_id);
-    huge_pages(&primitive_id);
     let samples = scene.render.samples as usize;
     let depth_range = depth_range(scene);
 
@@ -234,26 +229,6 @@ where
         object_id,
         primitive_id,
     })
-}
-
-/// Asks the kernel to back a large zeroed buffer, not yet touched, with transparent huge pages
-/// (one page fault per 2 MiB instead of per 4 KiB when the loop first writes it). Only a hint:
-/// failures are ignored, and the buffer's contents are unaffected.
-fn huge_pages<T>(v: &[T]) {
-    #[cfg(target_os = "linux")]
-    {
-        const HUGE: usize = 2 << 20;
-        let (start, len) = (v.as_ptr() as usize, std::mem::size_of_val(v));
-        let first = start.next_multiple_of(HUGE);
-        let end = (start + len) / HUGE * HUGE;
-        if end > first {
-            // SAFETY: the range lies inside the buffer's own allocation; MADV_HUGEPAGE changes
-            // no contents and no mapping the buffer relies on.
-            unsafe {
-                libc::madvise(first as *mut libc::c_void, end - first, libc::MADV_HUGEPAGE);
-            }
-        }
-    }
 }
 
 /// Near and far depth of the scene's bounding sphere, for the `depth` debug mode.
@@ -459,7 +434,12 @@ fn light_terms<const N: usize>(
 ) {
     let m = &scene.objects[obj].material;
     let x = add_scaled(&ray.origin, hit.t, &ray.dir);
-    let specular = m.specular.iter().any(|&s| s > 0.0);
+    // The unit vector toward the viewer, for the specular term only.
+    let v = m
+        .specular
+        .iter()
+        .any(|&s| s > 0.0)
+        .then(|| scale(&ray.dir, -1.0 / dir_len));
     let flat = scene.flat_normals[hit.prim as usize];
     let eps = 1e-7 * scene.extent;
     for (index, light) in scene.lights.iter().enumerate() {
@@ -493,10 +473,9 @@ fn light_terms<const N: usize>(
             let origin = add_scaled(&x, side, &flat);
             (Ray { origin, dir: l }, dist - eps)
         });
-        let spec = if specular {
-            // Half vector of the light and the unit vector toward the viewer.
-            let v = scale(&ray.dir, -1.0 / dir_len);
-            let s = add_scaled(&l, 1.0, &v);
+        let spec = if let Some(v) = &v {
+            // Blinn–Phong: the half vector of the light and viewer directions.
+            let s = add_scaled(&l, 1.0, v);
             let len = norm(&s);
             let h = if len > 0.0 { scale(&s, 1.0 / len) } else { l };
             dot(n, &h).max(0.0).powf(m.shininess)
