@@ -1581,9 +1581,11 @@ impl<const N: usize> Bvh<N> {
     /// `rays` (ray q against [lo, limit[q]]) and returns the nearest child met with the rays
     /// that met it (`EMPTY` if none), after pushing the other children met, farthest first (so
     /// they are popped nearest first). A child's entry parameter is the smallest among its rays.
+    /// Without `NEAREST_FIRST` (any-hit queries, whose answer does not depend on the order) the
+    /// children go in slot order, unsorted.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn descend<const AVX: bool, const P: usize>(
+    fn descend<const AVX: bool, const P: usize, const NEAREST_FIRST: bool>(
         &self,
         packet: &Packet<N, P>,
         cur: u32,
@@ -1609,6 +1611,22 @@ impl<const N: usize> Bvh<N> {
         let by_child = transpose8(met);
         let rays_of = |l: usize| ((by_child >> (8 * l)) & 0xff) as u32;
         if mask & (mask - 1) == 0 {
+            let l = mask.trailing_zeros() as usize;
+            return (nd.child[l], rays_of(l));
+        }
+        if !NEAREST_FIRST {
+            // Any order finds the same answer (shadow rays): children in slot order.
+            let mut rest = mask & (mask - 1);
+            while rest != 0 {
+                let l = rest.trailing_zeros() as usize;
+                rest &= rest - 1;
+                stack[*sp].write(Entry {
+                    node: nd.child[l],
+                    rays: rays_of(l),
+                    t: tn[l],
+                });
+                *sp += 1;
+            }
             let l = mask.trailing_zeros() as usize;
             return (nd.child[l], rays_of(l));
         }
@@ -1696,8 +1714,9 @@ impl<const N: usize> Bvh<N> {
         loop {
             // Descend through inner nodes, nearest child first.
             while cur & LEAF == 0 {
-                (cur, cur_rays) =
-                    self.descend::<AVX, P>(&packet, cur, cur_rays, lo, &limit, &mut stack, &mut sp);
+                (cur, cur_rays) = self.descend::<AVX, P, true>(
+                    &packet, cur, cur_rays, lo, &limit, &mut stack, &mut sp,
+                );
             }
             if cur != EMPTY {
                 let block = &self.blocks[(cur & !LEAF) as usize];
@@ -1770,8 +1789,9 @@ impl<const N: usize> Bvh<N> {
         let (mut cur, mut cur_rays) = (0u32, alive);
         while alive != 0 {
             while cur & LEAF == 0 {
-                (cur, cur_rays) =
-                    self.descend::<AVX, P>(&packet, cur, cur_rays, lo, &limit, &mut stack, &mut sp);
+                (cur, cur_rays) = self.descend::<AVX, P, false>(
+                    &packet, cur, cur_rays, lo, &limit, &mut stack, &mut sp,
+                );
             }
             if cur != EMPTY {
                 let block = &self.blocks[(cur & !LEAF) as usize];

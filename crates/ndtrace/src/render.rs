@@ -141,8 +141,9 @@ where
     let samples = scene.render.samples as usize;
     let depth_range = depth_range(scene);
 
-    // Cells are traced in groups whose rays fill a packet (all samples of a cell go together).
-    let group = (PACKET / samples).max(1);
+    // Cells are traced in groups whose rays fill four packets (all samples of a cell go
+    // together), so that the fewer shadow rays of a group still fill their packets.
+    let group = (4 * PACKET / samples).max(1);
     rgba.par_chunks_mut(CHUNK * 4)
         .zip(depth.par_chunks_mut(CHUNK))
         .zip(normal.par_chunks_mut(CHUNK * N))
