@@ -350,7 +350,8 @@ pub fn simplex_bounds<const N: usize>(points: &[[f64; N]]) -> Bounds<N> {
     (lo, hi)
 }
 
-/// A ray hit: parameter t, the caller's id of the simplex, barycentric coordinates `t_0 … t_{N−1}`.
+/// A ray hit: parameter t, the caller's id of the simplex, barycentric coordinates `t_0 … t_{N−1}`
+/// and the simplex's unit normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit<const N: usize> {
     /// Ray parameter (units of `|dir|`).
@@ -359,6 +360,9 @@ pub struct Hit<const N: usize> {
     pub prim: u32,
     /// Barycentric coordinates of the hit point, summing to 1.
     pub bary: [f64; N],
+    /// The unit normal n̂ of the simplex ([`PreparedSimplex::normal`], eq. 6 normalized), taken
+    /// from the leaf just tested so that shading needs no lookup by id.
+    pub normal: [f64; N],
 }
 
 /// A wide node: the boxes of its up to `NW` children, structure-of-arrays, and the child
@@ -380,14 +384,16 @@ impl<const N: usize> Node<N> {
     };
 }
 
-/// A leaf: up to 4 prepared simplices, structure-of-arrays (lane = simplex).
+/// A leaf: up to 4 prepared simplices, structure-of-arrays (lane = simplex). `x0` and `n̂`, all
+/// that a test reads before its early exit, come first and lie together.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 struct Block<const N: usize> {
+    /// `x0[i][lane]`.
+    x0: [[f64; W]; N],
     /// `m[0][i][lane]` = n̂_i, `m[k][i][lane]` = (r_k)_i; zero in unused lanes (which then miss as
     /// parallel rays).
     m: [[[f64; W]; N]; N],
-    /// `x0[i][lane]`.
-    x0: [[f64; W]; N],
     /// The caller's ids.
     ids: [u32; W],
     /// Lanes in use.
@@ -1218,6 +1224,9 @@ struct Best<const N: usize> {
     id: u32,
     bary: [f64; N],
     found: bool,
+    /// Where the simplex hit is: its block and lane.
+    block: u32,
+    lane: u32,
 }
 
 impl<const N: usize> Bvh<N> {
@@ -1705,6 +1714,8 @@ impl<const N: usize> Bvh<N> {
             id: u32::MAX,
             bary: [0.0; N],
             found: false,
+            block: 0,
+            lane: 0,
         }; P];
         // Blocks accept t < tmax, then, while a hit is held, t ≤ best.t (ties are settled by id).
         let mut tmax_b = [tmax; P];
@@ -1737,6 +1748,8 @@ impl<const N: usize> Bvh<N> {
                                 id,
                                 bary: hits.bary(l),
                                 found: true,
+                                block: cur & !LEAF,
+                                lane: l as u32,
                             };
                             limit[q] = f32_up(pad_up(t));
                             tmax_b[q] = t.next_up();
@@ -1751,10 +1764,14 @@ impl<const N: usize> Bvh<N> {
             }
         }
         for (o, b) in out.iter_mut().zip(&best) {
-            *o = b.found.then_some(Hit {
-                t: b.t,
-                prim: b.id,
-                bary: b.bary,
+            *o = b.found.then(|| {
+                let m = &self.blocks[b.block as usize].m[0];
+                Hit {
+                    t: b.t,
+                    prim: b.id,
+                    bary: b.bary,
+                    normal: std::array::from_fn(|i| m[i][b.lane as usize]),
+                }
             });
         }
     }
@@ -1876,18 +1893,17 @@ unsafe fn slabs_avx2<const N: usize, const P: usize>(
     let mut tn = inf;
     let mut met = 0u64;
     let mut left = rays;
-    // Ray q against the planes `bn` (entered) and `bf` (left) of each slab.
-    let mut test = |q: usize, bn: &[__m256; N], bf: &[__m256; N]| {
+    // Ray q against the slabs whose entry and exit planes, relative to its (shifted) origin,
+    // are `dn` and `df`: (b − o')·(1/d).
+    let mut test = |q: usize, dn: &[__m256; N], df: &[__m256; N]| {
         stats::count(2);
         let p = &packet.pre[q];
         let mut near = [_mm256_set1_ps(lo); N];
         let mut far = [_mm256_set1_ps(limit[q]); N];
         for i in 0..N {
             let inv = _mm256_set1_ps(p.inv[i]);
-            let a = _mm256_mul_ps(_mm256_sub_ps(bn[i], _mm256_set1_ps(p.o_near[i])), inv);
-            let c = _mm256_mul_ps(_mm256_sub_ps(bf[i], _mm256_set1_ps(p.o_far[i])), inv);
-            near[i] = _mm256_max_ps(a, near[i]);
-            far[i] = _mm256_min_ps(c, far[i]);
+            near[i] = _mm256_max_ps(_mm256_mul_ps(dn[i], inv), near[i]);
+            far[i] = _mm256_min_ps(_mm256_mul_ps(df[i], inv), far[i]);
         }
         let mut m = N;
         while m > 1 {
@@ -1902,13 +1918,33 @@ unsafe fn slabs_avx2<const N: usize, const P: usize>(
         met |= (_mm256_movemask_ps(hit) as u64) << (8 * q);
         tn = _mm256_min_ps(tn, _mm256_blendv_ps(inf, near[0], hit));
     };
+    // The planes `bn` (entered) and `bf` (left) relative to the origin of ray q.
+    let rel = |q: usize, bn: &[__m256; N], bf: &[__m256; N]| {
+        let p = &packet.pre[q];
+        let dn: [__m256; N] =
+            std::array::from_fn(|i| _mm256_sub_ps(bn[i], _mm256_set1_ps(p.o_near[i])));
+        let df: [__m256; N] =
+            std::array::from_fn(|i| _mm256_sub_ps(bf[i], _mm256_set1_ps(p.o_far[i])));
+        (dn, df)
+    };
     if let Some(side) = &packet.octant {
         let bn: [__m256; N] = std::array::from_fn(|i| ld(&node.b[side[i] & 1][i]));
         let bf: [__m256; N] = std::array::from_fn(|i| ld(&node.b[(side[i] & 1) ^ 1][i]));
-        while left != 0 {
-            let q = left.trailing_zeros() as usize;
-            left &= left - 1;
-            test(q, &bn, &bf);
+        if packet.shared_origin {
+            // One origin (a pinhole camera's rays): the differences are the same for every ray.
+            let (dn, df) = rel(0, &bn, &bf);
+            while left != 0 {
+                let q = left.trailing_zeros() as usize;
+                left &= left - 1;
+                test(q, &dn, &df);
+            }
+        } else {
+            while left != 0 {
+                let q = left.trailing_zeros() as usize;
+                left &= left - 1;
+                let (dn, df) = rel(q, &bn, &bf);
+                test(q, &dn, &df);
+            }
         }
     } else {
         let b: [[__m256; N]; 2] =
@@ -1917,11 +1953,12 @@ unsafe fn slabs_avx2<const N: usize, const P: usize>(
             let q = left.trailing_zeros() as usize;
             left &= left - 1;
             let side = &packet.pre[q].near;
-            test(
+            let (dn, df) = rel(
                 q,
                 &std::array::from_fn(|i| b[side[i] & 1][i]),
                 &std::array::from_fn(|i| b[(side[i] & 1) ^ 1][i]),
             );
+            test(q, &dn, &df);
         }
     }
     let mut out = [0.0f32; NW];
@@ -1960,6 +1997,10 @@ struct Packet<const N: usize, const P: usize> {
     /// The rays' common [`RayPre::near`] sides, when they all have the same.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     octant: Option<[usize; N]>,
+    /// Whether every ray has the same shifted f32 origins ([`RayPre::o_near`], `o_far`): the
+    /// slab planes relative to the origin are then computed once per node (bit-identical).
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    shared_origin: bool,
 }
 
 impl<const N: usize, const P: usize> Packet<N, P> {
@@ -1975,7 +2016,15 @@ impl<const N: usize, const P: usize> Packet<N, P> {
             .iter()
             .all(|p| p.near == pre[0].near)
             .then_some(pre[0].near);
-        Packet { pre, octant }
+        let shared_origin = pre.iter().all(|p| {
+            p.o_near.map(f32::to_bits) == pre[0].o_near.map(f32::to_bits)
+                && p.o_far.map(f32::to_bits) == pre[0].o_far.map(f32::to_bits)
+        });
+        Packet {
+            pre,
+            octant,
+            shared_origin,
+        }
     }
 }
 
@@ -2165,7 +2214,12 @@ mod tests {
             }
             if let Some((t, bary)) = p.intersect(ray, tmin, tmax) {
                 if best.is_none_or(|b| t < b.t || (t == b.t && *id < b.prim)) {
-                    best = Some(Hit { t, prim: *id, bary });
+                    best = Some(Hit {
+                        t,
+                        prim: *id,
+                        bary,
+                        normal: p.normal(),
+                    });
                 }
             }
         }
@@ -2323,15 +2377,21 @@ mod tests {
         let prims = prepare(&s);
         let bvh = build_soup(&s, PAR_MIN);
         let mut hits = 0;
-        // Packets of one octant (slab planes picked once per node) and of mixed octants.
-        let mut octants = [0; 2];
+        // Packets of mixed octants, of one octant (slab planes picked once per node), and of one
+        // octant and one origin (plane differences computed once per node).
+        let mut octants = [0; 3];
         for case in 0..400 {
             let kind = case % 4;
             let count = 1 + case % 11;
             let rays = packet_rays(&mut r, &s, kind, count);
             for rs in rays.chunks(PACKET) {
                 let packet = Packet::<N, PACKET>::new(rs, bvh.reach);
-                octants[usize::from(packet.octant.is_some())] += 1;
+                let kind = match (packet.octant, packet.shared_origin) {
+                    (None, _) => 0,
+                    (Some(_), false) => 1,
+                    (Some(_), true) => 2,
+                };
+                octants[kind] += 1;
             }
             let (tmin, tmax) = [(0.0, f64::INFINITY), (0.2, 1.0)][case % 2];
             let tmaxes: Vec<f64> = (0..count).map(|_| r.random_range(0.1..2.0)).collect();
@@ -2370,7 +2430,7 @@ mod tests {
         assert!(hits > 250, "N={N}: only {hits} hits");
         assert!(
             octants.iter().all(|&c| c > 50),
-            "N={N}: packets of mixed and of one octant: {octants:?}"
+            "N={N}: packets of mixed octants, one octant, one octant and origin: {octants:?}"
         );
     }
 
@@ -2593,9 +2653,18 @@ mod tests {
             #[cfg(target_arch = "x86_64")]
             if std::is_x86_feature_detected!("avx2") {
                 // SAFETY: AVX2 is available.
-                // Planes picked per ray and once per packet.
-                for octant in [None, Some(pre.near)] {
-                    let packet = Packet::<3, 1> { pre: [pre], octant };
+                // Planes picked per ray and once per packet, origin differences per ray and
+                // once per packet.
+                for (octant, shared_origin) in [
+                    (None, false),
+                    (Some(pre.near), false),
+                    (Some(pre.near), true),
+                ] {
+                    let packet = Packet::<3, 1> {
+                        pre: [pre],
+                        octant,
+                        shared_origin,
+                    };
                     let (m2, t2) = unsafe { slabs_avx2(&packet, &node, 1, 0.0, &[f32::INFINITY]) };
                     assert_eq!(
                         (mask as u64, tn.map(f32::to_bits)),

@@ -276,7 +276,7 @@ fn shading_normal<const N: usize>(
     local: usize,
     ray: &Ray<N>,
 ) -> Vector<N> {
-    let flat = scene.flat_normals[hit.prim as usize];
+    let flat = hit.normal;
     let mut n = flat;
     let o = &scene.objects[obj];
     if let Some(vn) = &o.vertex_normals {
@@ -441,7 +441,7 @@ fn light_terms<const N: usize>(
         .iter()
         .any(|&s| s > 0.0)
         .then(|| scale(&ray.dir, -1.0 / dir_len));
-    let flat = scene.flat_normals[hit.prim as usize];
+    let flat = hit.normal;
     let eps = 1e-7 * scene.extent;
     for (index, light) in scene.lights.iter().enumerate() {
         let (l, dist, color, atten) = match light {
