@@ -13,6 +13,9 @@
 //! Ray rates are per thread-CPU-second (Linux), so that other processes competing for the cores
 //! do not distort them; wall-clock rates are printed alongside.
 
+mod common;
+
+use common::thread_seconds;
 use ndtrace::accel::{simplex_bounds, Bounds, Bvh, PreparedSimplex, Ray};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -158,13 +161,6 @@ fn icosphere(levels: usize) -> Vec<[[f64; 3]; 3]> {
         f = nf;
     }
     f.iter().map(|t| [v[t[0]], v[t[1]], v[t[2]]]).collect()
-}
-
-/// CPU time of the calling thread in seconds (Linux: /proc/thread-self/schedstat), so that the
-/// figures are not distorted by other processes competing for the cores; wall time elsewhere.
-fn thread_seconds() -> Option<f64> {
-    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    Some(s.split_whitespace().next()?.parse::<f64>().ok()? * 1e-9)
 }
 
 /// Runs `f` and returns (wall seconds, thread CPU seconds or wall seconds).

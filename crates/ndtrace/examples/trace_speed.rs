@@ -21,6 +21,9 @@
 //! them), one packet over and over, and the shadow rays from their hits toward the first light
 //! one by one and as packets.
 
+mod common;
+
+use common::thread_seconds;
 use ndtrace::accel::Ray;
 use ndtrace::render::{trace, Progress, Retina};
 use ndtrace::scene::{load_file, Scene};
@@ -28,13 +31,6 @@ use ndtrace::with_scene;
 use std::hash::{Hash, Hasher};
 use std::path::Path;
 use std::time::Instant;
-
-/// CPU time of the calling thread in seconds (Linux: /proc/thread-self/schedstat).
-fn thread_seconds() -> Option<f64> {
-    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    let ns: u64 = s.split_whitespace().next()?.parse().ok()?;
-    Some(ns as f64 * 1e-9)
-}
 
 /// A hash of every output array of the retina, bit for bit.
 fn retina_hash(r: &Retina) -> u64 {
