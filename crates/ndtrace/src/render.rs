@@ -139,7 +139,11 @@ where
     let mut object_id = vec![0i32; cells];
     let mut primitive_id = vec![0i64; cells];
     let samples = scene.render.samples as usize;
-    let depth_range = depth_range(scene);
+    // Only the depth mode uses it (it reads every vertex).
+    let depth_range = match scene.render.mode {
+        RenderMode::Depth => depth_range(scene),
+        _ => (0.0, 1.0),
+    };
 
     // Cells are traced in groups whose rays fill four packets (all samples of a cell go
     // together), so that the fewer shadow rays of a group still fill their packets.
