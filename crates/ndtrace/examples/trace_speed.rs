@@ -144,7 +144,7 @@ fn orders<const N: usize>(scene: &Scene<N>) {
         };
         let d: [f64; N] = std::array::from_fn(|i| to[i] - x[i]);
         let len = d.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let n = scene.flat_normals[hit.prim as usize];
+        let n = hit.normal;
         let side = if (0..N).map(|i| n[i] * d[i]).sum::<f64>() >= 0.0 {
             1e-7
         } else {
