@@ -279,7 +279,7 @@ fn trace<const N: usize>(bvh: &Bvh<N>, res: usize, f: f64) {
         let (w, c) = timed(|| {
             any = 0;
             for_each_ray(&mut |ray| {
-                any += bvh.any_hit(ray, 0.0, f64::INFINITY, |_| true) as usize;
+                any += bvh.any_hit(ray, 0.0, f64::INFINITY, |_| true, 0..0) as usize;
             });
         });
         wall = wall.min(w);

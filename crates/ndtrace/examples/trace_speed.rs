@@ -162,10 +162,10 @@ fn orders<const N: usize>(scene: &Scene<N>) {
             if packets {
                 scene
                     .bvh
-                    .any_hits(&shadow, 0.0, &tmax, |_| true, &mut blocked);
+                    .any_hits(&shadow, 0.0, &tmax, |_| true, 0..0, &mut blocked);
             } else {
                 for (i, r) in shadow.iter().enumerate() {
-                    blocked[i] = scene.bvh.any_hit(r, 0.0, tmax[i], |_| true);
+                    blocked[i] = scene.bvh.any_hit(r, 0.0, tmax[i], |_| true, 0..0);
                 }
             }
         });

@@ -54,6 +54,7 @@ use crate::linalg::{dot, solve_block, sub, Matrix, Vector};
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 use std::mem::MaybeUninit;
+use std::ops::Range;
 
 /// Slack of the barycentric inside test: a hit needs `t_k ≥ −BARY_SLACK` for every k.
 ///
@@ -782,6 +783,10 @@ pub struct Bvh<const N: usize> {
     len: usize,
     /// Bound on |coordinate| of every box of the tree (for the slab test's error bound).
     reach: f64,
+    /// Per node, per child slot: the smallest (`[0]`) and largest (`[1]`) id in the child's
+    /// subtree (`u32::MAX`, 0 for an empty slot), so that an any-hit query told to skip a range
+    /// of ids ([`Bvh::any_hit`]) leaves out the subtrees that hold nothing else.
+    ranges: Vec<[[u32; NW]; 2]>,
 }
 
 /// A binary node of the build: f32 bounds rounded outward and either two children (the left
@@ -1217,6 +1222,36 @@ impl<const N: usize> Collapse<'_, N> {
     }
 }
 
+/// The id range of every child of every node (see [`Bvh::ranges`]). Children come after their
+/// parent in depth-first order, so one pass from the last node up sees every child first.
+fn id_ranges<const N: usize>(nodes: &[Node<N>], blocks: &[Block<N>]) -> Vec<[[u32; NW]; 2]> {
+    let mut ranges = vec![[[u32::MAX; NW], [0; NW]]; nodes.len()];
+    for i in (0..nodes.len()).rev() {
+        for l in 0..NW {
+            let c = nodes[i].child[l];
+            let (lo, hi) = if c == EMPTY {
+                (u32::MAX, 0)
+            } else if c & LEAF != 0 {
+                let b = &blocks[(c & !LEAF) as usize];
+                let ids = &b.ids[..b.count as usize];
+                (
+                    ids.iter().copied().min().unwrap(),
+                    ids.iter().copied().max().unwrap(),
+                )
+            } else {
+                let r = &ranges[c as usize];
+                (
+                    r[0].iter().copied().min().unwrap(),
+                    r[1].iter().copied().max().unwrap(),
+                )
+            };
+            ranges[i][0][l] = lo;
+            ranges[i][1][l] = hi;
+        }
+    }
+    ranges
+}
+
 /// Best hit so far of a closest-hit traversal.
 #[derive(Clone, Copy)]
 struct Best<const N: usize> {
@@ -1266,6 +1301,7 @@ impl<const N: usize> Bvh<N> {
                 blocks: Vec::new(),
                 len: 0,
                 reach: 0.0,
+                ranges: Vec::new(),
             };
         }
         // Pad each box by BOX_PAD of its largest extent, so that it contains the BARY_SLACK band.
@@ -1327,11 +1363,13 @@ impl<const N: usize> Bvh<N> {
         } else {
             f64::from(f32::MAX)
         };
+        let ranges = id_ranges(&nodes, &blocks);
         Bvh {
             nodes,
             blocks,
             len: n,
             reach,
+            ranges,
         }
     }
 
@@ -1392,7 +1430,7 @@ impl<const N: usize> Bvh<N> {
 
     /// Memory used by nodes + prims (the leaf blocks, with their ids), in bytes.
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node<N>>()
+        self.nodes.len() * (std::mem::size_of::<Node<N>>() + std::mem::size_of::<[[u32; NW]; 2]>())
             + self.blocks.len() * std::mem::size_of::<Block<N>>()
     }
 
@@ -1495,17 +1533,21 @@ impl<const N: usize> Bvh<N> {
         self.closest_hits_impl::<true, P>(rays, tmin, tmax, accept, out)
     }
 
-    /// Whether any simplex whose id passes `accept` is hit with t in (tmin, tmax) (shadow rays;
-    /// stops at the first such hit).
+    /// Whether any simplex whose id passes `accept` and lies outside `skip` is hit with t in
+    /// (tmin, tmax) (shadow rays; stops at the first such hit). Subtrees whose ids all lie in
+    /// `skip` are not visited: a shadow ray that cannot meet its own (convex) object skips it
+    /// at the cost of one comparison per child met, not of a traversal.
     pub fn any_hit(
         &self,
         ray: &Ray<N>,
         tmin: f64,
         tmax: f64,
         accept: impl Fn(u32) -> bool,
+        skip: Range<u32>,
     ) -> bool {
         let mut out = [false];
-        self.any_packet::<1>(std::slice::from_ref(ray), tmin, &[tmax], &accept, &mut out);
+        let one = std::slice::from_ref(ray);
+        self.any_packet::<1>(one, tmin, &[tmax], &accept, &skip, &mut out);
         out[0]
     }
 
@@ -1520,6 +1562,7 @@ impl<const N: usize> Bvh<N> {
         tmin: f64,
         tmax: &[f64],
         accept: impl Fn(u32) -> bool,
+        skip: Range<u32>,
         out: &mut [bool],
     ) {
         assert!(
@@ -1528,7 +1571,7 @@ impl<const N: usize> Bvh<N> {
         );
         let packets = rays.chunks(PACKET).zip(tmax.chunks(PACKET));
         for ((rays, tmax), out) in packets.zip(out.chunks_mut(PACKET)) {
-            self.any_packet::<PACKET>(rays, tmin, tmax, &accept, out);
+            self.any_packet::<PACKET>(rays, tmin, tmax, &accept, &skip, out);
         }
     }
 
@@ -1540,14 +1583,15 @@ impl<const N: usize> Bvh<N> {
         tmin: f64,
         tmax: &[f64],
         accept: &impl Fn(u32) -> bool,
+        skip: &Range<u32>,
         out: &mut [bool],
     ) {
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: AVX2 is available.
-            return unsafe { self.any_hits_avx2::<P>(rays, tmin, tmax, accept, out) };
+            return unsafe { self.any_hits_avx2::<P>(rays, tmin, tmax, accept, skip, out) };
         }
-        self.any_hits_impl::<false, P>(rays, tmin, tmax, accept, out);
+        self.any_hits_impl::<false, P>(rays, tmin, tmax, accept, skip, out);
     }
 
     /// [`Bvh::any_hits_impl`] compiled for AVX2 (same results).
@@ -1562,9 +1606,10 @@ impl<const N: usize> Bvh<N> {
         tmin: f64,
         tmax: &[f64],
         accept: &impl Fn(u32) -> bool,
+        skip: &Range<u32>,
         out: &mut [bool],
     ) {
-        self.any_hits_impl::<true, P>(rays, tmin, tmax, accept, out)
+        self.any_hits_impl::<true, P>(rays, tmin, tmax, accept, skip, out)
     }
 
     /// Tests a block, with the AVX2 kernel when `AVX` (only instantiated inside functions
@@ -1591,7 +1636,7 @@ impl<const N: usize> Bvh<N> {
     /// that met it (`EMPTY` if none), after pushing the other children met, farthest first (so
     /// they are popped nearest first). A child's entry parameter is the smallest among its rays.
     /// Without `NEAREST_FIRST` (any-hit queries, whose answer does not depend on the order) the
-    /// children go in slot order, unsorted.
+    /// children go in slot order, unsorted, and those whose ids all lie in `skip` are dropped.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn descend<const AVX: bool, const P: usize, const NEAREST_FIRST: bool>(
@@ -1601,6 +1646,7 @@ impl<const N: usize> Bvh<N> {
         rays: u32,
         lo: f32,
         limit: &[f32; P],
+        skip: &Range<u32>,
         stack: &mut [MaybeUninit<Entry>; STACK_SIZE],
         sp: &mut usize,
     ) -> (u32, u32) {
@@ -1612,7 +1658,14 @@ impl<const N: usize> Bvh<N> {
         any |= any >> 32;
         any |= any >> 16;
         any |= any >> 8;
-        let mask = (any & 0xff) as u32;
+        let mut mask = (any & 0xff) as u32;
+        if !NEAREST_FIRST && !skip.is_empty() {
+            let r = &self.ranges[cur as usize];
+            for l in 0..NW {
+                let inside = skip.start <= r[0][l] && r[1][l] < skip.end;
+                mask &= !((inside as u32) << l);
+            }
+        }
         if mask == 0 {
             return (EMPTY, 0);
         }
@@ -1726,7 +1779,14 @@ impl<const N: usize> Bvh<N> {
             // Descend through inner nodes, nearest child first.
             while cur & LEAF == 0 {
                 (cur, cur_rays) = self.descend::<AVX, P, true>(
-                    &packet, cur, cur_rays, lo, &limit, &mut stack, &mut sp,
+                    &packet,
+                    cur,
+                    cur_rays,
+                    lo,
+                    &limit,
+                    &(0..0),
+                    &mut stack,
+                    &mut sp,
                 );
             }
             if cur != EMPTY {
@@ -1783,11 +1843,19 @@ impl<const N: usize> Bvh<N> {
         tmin: f64,
         tmax: &[f64],
         accept: &impl Fn(u32) -> bool,
+        skip: &Range<u32>,
         out: &mut [bool],
     ) {
         out.fill(false);
         let k = rays.len();
         if self.nodes.is_empty() || k == 0 {
+            return;
+        }
+        let whole = (
+            self.ranges[0][0].iter().copied().min().unwrap(),
+            self.ranges[0][1].iter().copied().max().unwrap(),
+        );
+        if skip.start <= whole.0 && whole.1 < skip.end {
             return;
         }
         let packet = Packet::<N, P>::new(rays, self.reach);
@@ -1807,7 +1875,7 @@ impl<const N: usize> Bvh<N> {
         while alive != 0 {
             while cur & LEAF == 0 {
                 (cur, cur_rays) = self.descend::<AVX, P, false>(
-                    &packet, cur, cur_rays, lo, &limit, &mut stack, &mut sp,
+                    &packet, cur, cur_rays, lo, &limit, skip, &mut stack, &mut sp,
                 );
             }
             if cur != EMPTY {
@@ -1822,7 +1890,8 @@ impl<const N: usize> Bvh<N> {
                     while mask != 0 {
                         let l = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        if accept(block.ids[l]) {
+                        let id = block.ids[l];
+                        if accept(id) && !skip.contains(&id) {
                             out[q] = true;
                             alive &= !(1 << q);
                             break;
@@ -2290,14 +2359,19 @@ mod tests {
                 };
                 let filters: [&dyn Fn(u32) -> bool; 3] =
                     [&|_| true, &|id| id % 3 != 0, &|id| id & 0x1000 == 0];
+                // Ids skipped by the any-hit queries: none, a random range, or all.
+                let a = r.random_range(0..2200);
+                let skip = [0..0, a..a + r.random_range(0..1100), 0..u32::MAX][case % 3].clone();
                 for (fi, f) in filters.iter().enumerate() {
                     let want = brute(&prims, &ray, tmin, tmax, f);
                     let got = bvh.closest_hit(&ray, tmin, tmax, f);
                     assert_eq!(got, want, "N={N} round {round} case {case} filter {fi}");
+                    let kept = |id| f(id) && !skip.contains(&id);
+                    let want_any = brute(&prims, &ray, tmin, tmax, kept).is_some();
                     assert_eq!(
-                        bvh.any_hit(&ray, tmin, tmax, f),
-                        want.is_some(),
-                        "N={N} any_hit"
+                        bvh.any_hit(&ray, tmin, tmax, f, skip.clone()),
+                        want_any,
+                        "N={N} any_hit, skipping {skip:?}"
                     );
                     // The portable/SSE path too (the public calls take AVX2 when available).
                     let (mut sse, mut blocked) = ([None], [false]);
@@ -2307,8 +2381,8 @@ mod tests {
                         sse[0], want,
                         "N={N} round {round} case {case} filter {fi}: SSE path"
                     );
-                    bvh.any_hits_impl::<false, 1>(one, tmin, &[tmax], f, &mut blocked);
-                    assert_eq!(blocked[0], want.is_some());
+                    bvh.any_hits_impl::<false, 1>(one, tmin, &[tmax], f, &skip, &mut blocked);
+                    assert_eq!(blocked[0], want_any);
                     if let Some(h) = want {
                         hits += 1;
                         let same_t = prims.iter().filter(|(p, id)| {
@@ -2417,12 +2491,12 @@ mod tests {
                     .map(|(ray, &t)| brute(&prims, ray, tmin, t, f).is_some())
                     .collect();
                 let mut got = vec![false; count];
-                bvh.any_hits(&rays, tmin, &tmaxes, f, &mut got);
+                bvh.any_hits(&rays, tmin, &tmaxes, f, 0..0, &mut got);
                 assert_eq!(got, want, "N={N} case {case}: any_hits");
                 let mut portable = vec![false; count];
                 let chunks = rays.chunks(PACKET).zip(tmaxes.chunks(PACKET));
                 for ((rs, ts), out) in chunks.zip(portable.chunks_mut(PACKET)) {
-                    bvh.any_hits_impl::<false, PACKET>(rs, tmin, ts, &f, out);
+                    bvh.any_hits_impl::<false, PACKET>(rs, tmin, ts, &f, &(0..0), out);
                 }
                 assert_eq!(portable, want, "N={N} case {case}: portable any_hits");
             }
@@ -2437,6 +2511,81 @@ mod tests {
     #[test]
     fn accel_packets_equal_brute_force_ray_by_ray() {
         for_each_dim!(packets_agree_with_brute_force);
+    }
+
+    /// Two clusters of simplices with ids 0..150 and 150..300: the id range of every child slot
+    /// is the min/max over its subtree, whole subtrees of one cluster can be skipped, and
+    /// any-hit queries that skip ids agree with brute force over the ids they keep.
+    fn skipping_ids_agrees_with_brute_force<const N: usize>() {
+        let mut r = rng(2700 + N as u64);
+        let mut s = vec![];
+        for i in 0..300u32 {
+            let mut c = random_vector::<N>(&mut r, 1.0);
+            c[0] += if i < 150 { -2.0 } else { 2.0 };
+            s.push((random_simplex(&mut r, &c, 0.4), i));
+        }
+        let prims = prepare(&s);
+        let bvh = build_soup(&s, PAR_MIN);
+        fn subtree<const N: usize>(bvh: &Bvh<N>, c: u32) -> (u32, u32) {
+            if c == EMPTY {
+                return (u32::MAX, 0);
+            }
+            if c & LEAF != 0 {
+                let b = &bvh.blocks[(c & !LEAF) as usize];
+                let ids = &b.ids[..b.count as usize];
+                return (*ids.iter().min().unwrap(), *ids.iter().max().unwrap());
+            }
+            bvh.nodes[c as usize]
+                .child
+                .iter()
+                .map(|&k| subtree(bvh, k))
+                .fold((u32::MAX, 0), |a, b| (a.0.min(b.0), a.1.max(b.1)))
+        }
+        let mut pure = 0;
+        for (i, nd) in bvh.nodes.iter().enumerate() {
+            for l in 0..NW {
+                let want = subtree(&bvh, nd.child[l]);
+                assert_eq!((bvh.ranges[i][0][l], bvh.ranges[i][1][l]), want, "N={N}");
+                pure += (nd.child[l] & LEAF == 0 && want.1 < 150) as usize;
+            }
+        }
+        assert!(
+            pure > 0,
+            "N={N}: no inner subtree holds only the first cluster"
+        );
+        let mut blocked = [0; 3];
+        for case in 0..200 {
+            let rays = packet_rays(&mut r, &s, case % 3, 1 + case % PACKET);
+            let tmax: Vec<f64> = rays.iter().map(|_| r.random_range(0.5..3.0)).collect();
+            for (k, skip) in [0..0, 0..150, 150..300, 0..300, 100..200]
+                .into_iter()
+                .enumerate()
+            {
+                let want: Vec<bool> = rays
+                    .iter()
+                    .zip(&tmax)
+                    .map(|(ray, &t)| brute(&prims, ray, 0.0, t, |id| !skip.contains(&id)).is_some())
+                    .collect();
+                let mut got = vec![false; rays.len()];
+                bvh.any_hits(&rays, 0.0, &tmax, |_| true, skip.clone(), &mut got);
+                assert_eq!(got, want, "N={N} case {case}, skipping {skip:?}");
+                for ((ray, &t), &w) in rays.iter().zip(&tmax).zip(&want) {
+                    assert_eq!(bvh.any_hit(ray, 0.0, t, |_| true, skip.clone()), w);
+                }
+                if k < 3 {
+                    blocked[k] += want.iter().filter(|&&b| b).count();
+                }
+            }
+        }
+        assert!(
+            blocked.iter().all(|&b| b > 20),
+            "N={N}: {blocked:?} rays blocked"
+        );
+    }
+
+    #[test]
+    fn accel_any_hits_skipping_ids_equal_brute_force() {
+        for_each_dim!(skipping_ids_agrees_with_brute_force);
     }
 
     #[test]
@@ -2464,7 +2613,7 @@ mod tests {
             dir: [1.0, 0.0, 0.0],
         };
         assert_eq!(bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true), None);
-        assert!(!bvh.any_hit(&ray, 0.0, f64::INFINITY, |_| true));
+        assert!(!bvh.any_hit(&ray, 0.0, f64::INFINITY, |_| true, 0..0));
     }
 
     /// All permutations of 0..m.
@@ -2597,7 +2746,7 @@ mod tests {
                         ok,
                         "N={N} shape {shape}: outside {origin:?} to {g:?}: {h:?}"
                     );
-                    assert!(bvh.any_hit(&ray, 0.0, f64::INFINITY, |_| true));
+                    assert!(bvh.any_hit(&ray, 0.0, f64::INFINITY, |_| true, 0..0));
                 }
             }
         }

@@ -24,6 +24,7 @@ pub mod accel;
 pub mod batch;
 pub mod camera;
 pub mod composite;
+pub mod convex;
 pub mod dim;
 pub mod error;
 pub mod exact;

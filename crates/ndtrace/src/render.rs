@@ -14,6 +14,7 @@ use crate::scene::desc::RenderMode;
 use crate::scene::{Light, Scene};
 use crate::{NdError, NdResult};
 use rayon::prelude::*;
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 /// Cells per unit of parallel work (and of progress reporting and cancellation checks).
@@ -366,8 +367,18 @@ struct Work<const N: usize> {
     shadow_rays: Vec<Ray<N>>,
     shadow_tmax: Vec<f64>,
     blocked: Vec<bool>,
-    /// (light, term, shadow ray, tmax) as shading asks for them.
-    requests: Vec<(usize, usize, Ray<N>, f64)>,
+    /// (light, term, shadow ray) as shading asks for them.
+    requests: Vec<(usize, usize, Shadow<N>)>,
+}
+
+/// A shadow ray: the light counts unless a simplex whose id lies outside `skip` is hit with t in
+/// (0, tmax). `skip` holds the ids of the object hit when that object is convex and the ray
+/// leaves it on the outer side ([`crate::convex`]), else it is empty.
+#[derive(Clone, Debug)]
+struct Shadow<const N: usize> {
+    ray: Ray<N>,
+    tmax: f64,
+    skip: Range<u32>,
 }
 
 impl<const N: usize> Work<N> {
@@ -403,8 +414,8 @@ impl<const N: usize> Work<N> {
                 RenderMode::Shaded => {
                     let m = &scene.objects[obj].material;
                     light_terms(scene, ray, dir_len, hit, obj, &n, |l, color, shadow| {
-                        if let Some((sray, tmax)) = shadow {
-                            requests.push((l, self.terms.len(), sray, tmax));
+                        if let Some(shadow) = shadow {
+                            requests.push((l, self.terms.len(), shadow));
                         }
                         // Set to the shadow ray's index once the rays are in light order.
                         self.shadow.push(None);
@@ -436,26 +447,33 @@ impl<const N: usize> Work<N> {
             self.shaded.push(Some((c, nearest)));
         }
         if !requests.is_empty() {
-            // Light order, so that each packet holds rays toward one light.
-            if scene.lights.len() > 1 {
-                requests.sort_by_key(|q| q.0);
+            // Light order, so that each packet holds rays toward one light, then by the ids
+            // skipped, which a packet shares.
+            if scene.lights.len() > 1 || scene.objects.len() > 1 {
+                requests.sort_by_key(|q| (q.0, q.2.skip.start, q.2.skip.end));
             }
             self.shadow_rays.clear();
             self.shadow_tmax.clear();
-            for (i, &(_, term, sray, tmax)) in requests.iter().enumerate() {
-                self.shadow[term] = Some(i);
-                self.shadow_rays.push(sray);
-                self.shadow_tmax.push(tmax);
+            for (i, (_, term, shadow)) in requests.iter().enumerate() {
+                self.shadow[*term] = Some(i);
+                self.shadow_rays.push(shadow.ray);
+                self.shadow_tmax.push(shadow.tmax);
             }
             self.blocked.clear();
             self.blocked.resize(requests.len(), false);
-            scene.bvh.any_hits(
-                &self.shadow_rays,
-                0.0,
-                &self.shadow_tmax,
-                |_| true,
-                &mut self.blocked,
-            );
+            let mut first = 0;
+            for run in requests.chunk_by(|a, b| a.2.skip == b.2.skip) {
+                let all = first..first + run.len();
+                scene.bvh.any_hits(
+                    &self.shadow_rays[all.clone()],
+                    0.0,
+                    &self.shadow_tmax[all.clone()],
+                    |_| true,
+                    run[0].2.skip.clone(),
+                    &mut self.blocked[all],
+                );
+                first += run.len();
+            }
         }
         // Contributions in light order per ray (the order of the sum, as for one ray alone).
         for (i, &(r, color)) in self.terms.iter().enumerate() {
@@ -473,8 +491,8 @@ impl<const N: usize> Work<N> {
 }
 
 /// N-D Lambert + Blinn–Phong (course notes Part II(B)): calls `emit` per light that faces the
-/// surface, in light order, with its index, its colour contribution and the shadow ray (with
-/// its tmax) that decides whether it counts. The intensity of a light is the dot product of the
+/// surface, in light order, with its index, its colour contribution and the shadow ray that
+/// decides whether it counts (none when nothing could block it). The intensity of a light is the dot product of the
 /// unit normal with the unit vector toward it, clamped at 0 (lights behind the surface
 /// contribute nothing and need no shadow ray). `dir_len` is |ray.dir|.
 #[inline(always)]
@@ -485,9 +503,11 @@ fn light_terms<const N: usize>(
     hit: &Hit<N>,
     obj: usize,
     n: &Vector<N>,
-    mut emit: impl FnMut(usize, [f64; 3], Option<(Ray<N>, f64)>),
+    mut emit: impl FnMut(usize, [f64; 3], Option<Shadow<N>>),
 ) {
-    let m = &scene.objects[obj].material;
+    let o = &scene.objects[obj];
+    let m = &o.material;
+    let all = 0..scene.flat_normals.len() as u32;
     let x = add_scaled(&ray.origin, hit.t, &ray.dir);
     // The unit vector toward the viewer, for the specular term only.
     let v = m
@@ -522,12 +542,24 @@ fn light_terms<const N: usize>(
         if ndl <= 0.0 {
             continue;
         }
-        let shadow = scene.render.shadows.then(|| {
+        let shadow = if scene.render.shadows {
             // Leave the surface on the light's side of the simplex's hyperplane.
-            let side = if dot(&flat, &l) >= 0.0 { eps } else { -eps };
-            let origin = add_scaled(&x, side, &flat);
-            (Ray { origin, dir: l }, dist - eps)
-        });
+            let outward = dot(&flat, &l) >= 0.0;
+            let origin = add_scaled(&x, if outward { eps } else { -eps }, &flat);
+            // A convex object lies on its centre's side of the hyperplane: a ray leaving on
+            // the other side never meets it again.
+            let skip = match &o.convex {
+                Some(c) if (dot(&flat, &sub(c, &x)) < 0.0) == outward => scene.ids(obj),
+                _ => 0..0,
+            };
+            (skip != all).then_some(Shadow {
+                ray: Ray { origin, dir: l },
+                tmax: dist - eps,
+                skip,
+            })
+        } else {
+            None
+        };
         let spec = if let Some(v) = &v {
             // Blinn–Phong: the half vector of the light and viewer directions.
             let s = add_scaled(&l, 1.0, v);
@@ -577,7 +609,8 @@ mod tests {
                 std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k]);
             let dir_len = norm(&ray.dir);
             light_terms(scene, &ray, dir_len, &hit, obj, &n, |_, term, shadow| {
-                if shadow.is_some_and(|(s, tmax)| scene.bvh.any_hit(&s, 0.0, tmax, |_| true)) {
+                if shadow.is_some_and(|s| scene.bvh.any_hit(&s.ray, 0.0, s.tmax, |_| true, s.skip))
+                {
                     blocked += 1;
                     return;
                 }
@@ -711,6 +744,88 @@ shadows = true
 "#
             );
             shades_as_one_ray_at_a_time(&text, 60, 5);
+        }
+    }
+
+    /// Shadow rays that skip the convex object they leave change nothing: the retina is the
+    /// same, bit for bit, when every object's convexity certificate is dropped (so that every
+    /// shadow ray is tested against everything).
+    fn skipping_convex_objects_changes_nothing<const N: usize>(scene: &mut Scene<N>) -> usize {
+        let fast = trace(scene, &Progress::default()).unwrap();
+        let convex = scene.objects.iter().filter(|o| o.convex.is_some()).count();
+        scene.objects.iter_mut().for_each(|o| o.convex = None);
+        let slow = trace(scene, &Progress::default()).unwrap();
+        assert!(fast
+            .rgba
+            .iter()
+            .zip(&slow.rgba)
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        assert_eq!(fast, slow);
+        convex
+    }
+
+    #[test]
+    fn shadow_rays_skipping_convex_objects_give_the_same_image() {
+        // Convex objects that shadow each other, a light inside one of them, each kind of
+        // light, and a non-convex lattice sphere, all in a convex room with the camera: the
+        // shadow rays from its walls toward the directional light leave on the inner side and
+        // are blocked by the room itself.
+        for (dim, extra) in [(3, ""), (4, ", 0.3"), (5, ", 0.3, -0.2")] {
+            let up: Vec<String> = (1..dim - 1)
+                .map(|k| {
+                    let e: Vec<&str> = (0..dim)
+                        .map(|i| if i == k { "1.0" } else { "0.0" })
+                        .collect();
+                    format!("[{}]", e.join(", "))
+                })
+                .collect();
+            let z = ", 0.0".repeat(dim - 3);
+            let text = format!(
+                r#"
+dim = {dim}
+ambient = [0.1, 0.1, 0.1]
+[camera]
+position = [0.5, 1.0, 6.0{extra}]
+look_at = [0.0, 0.0, 0.0{z}]
+up = [{up}]
+fov = 50.0
+resolution = 24
+[[lights]]
+type = "point"
+position = [2.0, 3.0, 2.5{z}]
+[[lights]]
+type = "directional"
+direction = [-1.0, 0.5, 0.2{extra}]
+[[lights]]
+type = "point"
+position = [-0.6, 0.2, 0.4{z}]
+color = [0.5, 0.2, 0.2]
+[[objects]]
+shape = "cross_polytope"
+transform = [{{ scale = 0.8 }}, {{ translate = [-0.6, 0.2, 0.4{z}] }}]
+[[objects]]
+shape = "simplex"
+transform = [{{ scale = 0.5 }}, {{ translate = [0.9, 0.8, 1.2{z}] }}]
+[[objects]]
+shape = "hypercube"
+transform = [{{ scale = 7.0 }}]
+material = {{ smooth = true }}
+[[objects]]
+shape = "sphere"
+subdivisions = 1
+transform = [{{ scale = 0.4 }}, {{ translate = [1.0, -0.6, -0.5{z}] }}]
+[render]
+shadows = true
+two_sided = true
+"#,
+                up = up.join(", ")
+            );
+            let (_, mut any) = load_toml_str(&text, "test.toml", None).unwrap();
+            let convex = crate::with_scene!(&mut any, scene, _N => skipping_convex_objects_changes_nothing(scene));
+            assert_eq!(
+                convex, 3,
+                "N={dim}: the polytopes are convex, the sphere is not"
+            );
         }
     }
 

@@ -67,6 +67,10 @@ pub struct Object<const N: usize> {
     pub material: Material,
     /// Per-vertex unit normals when the material is smooth.
     pub vertex_normals: Option<Vec<Vector<N>>>,
+    /// When the mesh bounds a convex body (found only for scenes with shadows and lights): a
+    /// point inside it ([`crate::convex::convex_centre`]). Shadow rays leaving the object on
+    /// the other side of a simplex's hyperplane skip it.
+    pub convex: Option<Vector<N>>,
 }
 
 /// A scene ready to trace: world-space objects, the BVH over all their simplices (built once),
@@ -104,6 +108,16 @@ impl<const N: usize> Scene<N> {
     pub fn locate(&self, global: u32) -> (usize, usize) {
         let obj = self.offsets.partition_point(|&o| o <= global) - 1;
         (obj, (global - self.offsets[obj]) as usize)
+    }
+
+    /// The global ids of object `obj`'s simplices.
+    pub fn ids(&self, obj: usize) -> std::ops::Range<u32> {
+        let end = self
+            .offsets
+            .get(obj + 1)
+            .copied()
+            .unwrap_or(self.flat_normals.len() as u32);
+        self.offsets[obj]..end
     }
 }
 
@@ -860,6 +874,7 @@ pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N
             mesh,
             material: mat,
             vertex_normals,
+            convex: None,
         });
     }
     // 3. Prepared simplices and the BVH.
@@ -901,6 +916,13 @@ pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N
                 .collect()
         })
         .collect();
+    // Convexity certificates, which only shadow rays use.
+    if r.shadows && !lights.is_empty() {
+        for (o, list) in objects.iter_mut().zip(&per_object) {
+            let normals: Vec<Vector<N>> = list.par_iter().map(|rec| rec.2).collect();
+            o.convex = crate::convex::convex_centre(&o.mesh, &normals);
+        }
+    }
     let mut prims = Vec::with_capacity(total as usize);
     let mut ids = Vec::with_capacity(total as usize);
     let mut bounds = Vec::with_capacity(total as usize);
