@@ -45,6 +45,8 @@ pub const EDGE: f64 = 1e-9;
 
 /// Probe rays tried before giving up on a mesh whose every probe grazes a ridge.
 const PROBES: usize = 8;
+/// Simplices whose hyperplanes every vertex is checked against first.
+const SAMPLES: usize = 32;
 
 /// An interior point c of the convex body the mesh bounds, or `None` when the mesh is not (or
 /// cannot be shown to be) the consistently oriented boundary of a convex body (see the module
@@ -105,6 +107,20 @@ pub fn convex_centre<const N: usize>(mesh: &Mesh<N>, normals: &[Vector<N>]) -> O
     {
         return None;
     }
+    let flat = FLAT * d;
+    // A quick necessary condition, which most non-convex meshes fail before the ridge sort:
+    // every vertex (used or not) on the inner side of the hyperplanes of a few simplices spread
+    // over the mesh.
+    let sample: Vec<&Hyperplane<N>> = (0..SAMPLES)
+        .map(|j| &planes[j * s.len() / SAMPLES])
+        .collect();
+    if !mesh
+        .vertices
+        .par_iter()
+        .all(|v| sample.iter().all(|p| out * p.distance(v) <= flat))
+    {
+        return None;
+    }
     // 2 and 3. Ridges, as (hash of the sorted vertex indices, simplex·N + omitted slot), sorted
     // so that the two simplices of a ridge are neighbours. A run of equal hashes must be one
     // ridge of two simplices (a hash collision only makes the certificate fail).
@@ -113,7 +129,6 @@ pub fn convex_centre<const N: usize>(mesh: &Mesh<N>, normals: &[Vector<N>]) -> O
         .map(|r| (ridge(&s[r / N], r % N).0, r as u64))
         .collect();
     ridges.par_sort_unstable();
-    let flat = FLAT * d;
     // The vertex of simplex b's ridge slot opposite the ridge, against simplex a's hyperplane.
     let convex_pair = |a: usize, b: usize| {
         let opposite = &mesh.vertices[s[b / N][b % N] as usize];
