@@ -2557,10 +2557,17 @@ mod tests {
         for case in 0..200 {
             let rays = packet_rays(&mut r, &s, case % 3, 1 + case % PACKET);
             let tmax: Vec<f64> = rays.iter().map(|_| r.random_range(0.5..3.0)).collect();
-            for (k, skip) in [0..0, 0..150, 150..300, 0..300, 100..200]
-                .into_iter()
-                .enumerate()
-            {
+            let ranges = [
+                0..0,
+                0..150,
+                150..300,
+                0..300,
+                100..200,
+                0..149,
+                1..150,
+                150..299,
+            ];
+            for (k, skip) in ranges.into_iter().enumerate() {
                 let want: Vec<bool> = rays
                     .iter()
                     .zip(&tmax)

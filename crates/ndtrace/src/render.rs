@@ -544,13 +544,14 @@ fn light_terms<const N: usize>(
         }
         let shadow = if scene.render.shadows {
             // Leave the surface on the light's side of the simplex's hyperplane.
-            let outward = dot(&flat, &l) >= 0.0;
-            let origin = add_scaled(&x, if outward { eps } else { -eps }, &flat);
-            // A convex object lies on its centre's side of the hyperplane: a ray leaving on
-            // the other side never meets it again.
-            let skip = match &o.convex {
-                Some(c) if (dot(&flat, &sub(c, &x)) < 0.0) == outward => scene.ids(obj),
-                _ => 0..0,
+            let along = dot(&flat, &l) >= 0.0;
+            let origin = add_scaled(&x, if along { eps } else { -eps }, &flat);
+            // A convex object lies on one side of the hyperplane: a ray leaving on the other
+            // side never meets it again.
+            let skip = if o.convex == Some(along) {
+                scene.ids(obj)
+            } else {
+                0..0
             };
             (skip != all).then_some(Shadow {
                 ray: Ray { origin, dir: l },
@@ -826,6 +827,37 @@ two_sided = true
                 convex, 3,
                 "N={dim}: the polytopes are convex, the sphere is not"
             );
+        }
+        // One convex object alone, lit from outside: its shadow rays are not traced at all.
+        for dim in [3, 4] {
+            let z = ", 0.0".repeat(dim - 3);
+            let up = if dim == 3 {
+                "[[0.0, 1.0, 0.0]]"
+            } else {
+                "[[0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]"
+            };
+            let text = format!(
+                r#"
+dim = {dim}
+[camera]
+position = [0.5, 1.0, 4.0{z}]
+look_at = [0.0, 0.0, 0.0{z}]
+up = {up}
+fov = 50.0
+resolution = 16
+[[lights]]
+type = "point"
+position = [2.0, 3.0, 2.5{z}]
+[[objects]]
+shape = "cross_polytope"
+transform = [{{ rotate = {{ plane = [0, 2], degrees = 20.0 }} }}]
+[render]
+shadows = true
+"#
+            );
+            let (_, mut any) = load_toml_str(&text, "test.toml", None).unwrap();
+            let convex = crate::with_scene!(&mut any, scene, _N => skipping_convex_objects_changes_nothing(scene));
+            assert_eq!(convex, 1, "N={dim}");
         }
     }
 

@@ -67,10 +67,11 @@ pub struct Object<const N: usize> {
     pub material: Material,
     /// Per-vertex unit normals when the material is smooth.
     pub vertex_normals: Option<Vec<Vector<N>>>,
-    /// When the mesh bounds a convex body (found only for scenes with shadows and lights): a
-    /// point inside it ([`crate::convex::convex_centre`]). Shadow rays leaving the object on
-    /// the other side of a simplex's hyperplane skip it.
-    pub convex: Option<Vector<N>>,
+    /// When the mesh bounds a convex body (checked only for scenes with shadows and lights):
+    /// whether the body lies on the side of every simplex's hyperplane opposite its normal n̂
+    /// ([`crate::convex::convex_side`]). Shadow rays leaving a simplex away from the body skip
+    /// the object.
+    pub convex: Option<bool>,
 }
 
 /// A scene ready to trace: world-space objects, the BVH over all their simplices (built once),
@@ -918,9 +919,14 @@ pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N
         .collect();
     // Convexity certificates, which only shadow rays use.
     if r.shadows && !lights.is_empty() {
-        for (o, list) in objects.iter_mut().zip(&per_object) {
+        for ((o, list), d) in objects.iter_mut().zip(&per_object).zip(&desc.objects) {
             let normals: Vec<Vector<N>> = list.par_iter().map(|rec| rec.2).collect();
-            o.convex = crate::convex::convex_centre(&o.mesh, &normals);
+            // The generated polytopes are convex; an affine map keeps them so.
+            let known = matches!(
+                d.shape,
+                ShapeKind::Simplex | ShapeKind::Hypercube | ShapeKind::CrossPolytope
+            );
+            o.convex = crate::convex::convex_side(&o.mesh, &normals, known);
         }
     }
     let mut prims = Vec::with_capacity(total as usize);
