@@ -1307,8 +1307,9 @@ def heavy_scene(res, samples):
 
 
 def test_progress_is_reported_and_ends_at_total():
-    scene = heavy_scene(40, 16)
-    total = 40 ** 3
+    # Several polling periods (50 ms) of work, even on a fast machine.
+    scene = heavy_scene(48, 48)
+    total = 48 ** 3
     calls = []
     r = ndtrace.trace(scene, threads=2, progress=lambda done, tot: calls.append((done, tot)))
     assert r.hit.sum() > 0
