@@ -18,7 +18,6 @@ mod common;
 use common::thread_seconds;
 use ndtrace::accel::{simplex_bounds, Bounds, Bvh, PreparedSimplex, Ray};
 use rayon::prelude::*;
-use std::collections::HashMap;
 use std::time::Instant;
 
 /// `count` random tetrahedra of size ~`size` in [−1, 1]⁴ (a fixed LCG, so runs are comparable).
@@ -92,75 +91,11 @@ fn cubed_sphere<const N: usize>(k: usize) -> Vec<[[f64; N]; N]> {
 }
 
 /// An icosahedron subdivided `levels` times, on the unit sphere.
-fn icosphere(levels: usize) -> Vec<[[f64; 3]; 3]> {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut v: Vec<[f64; 3]> = vec![
-        [-1., t, 0.],
-        [1., t, 0.],
-        [-1., -t, 0.],
-        [1., -t, 0.],
-        [0., -1., t],
-        [0., 1., t],
-        [0., -1., -t],
-        [0., 1., -t],
-        [t, 0., -1.],
-        [t, 0., 1.],
-        [-t, 0., -1.],
-        [-t, 0., 1.],
-    ];
-    let unit = |p: [f64; 3]| {
-        let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-        [p[0] / l, p[1] / l, p[2] / l]
-    };
-    v.iter_mut().for_each(|p| *p = unit(*p));
-    let mut f: Vec<[usize; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut mid: HashMap<(usize, usize), usize> = HashMap::new();
-        let mut nf = Vec::with_capacity(f.len() * 4);
-        for tri in &f {
-            let mut m = [0usize; 3];
-            for e in 0..3 {
-                let (a, b) = (tri[e], tri[(e + 1) % 3]);
-                let key = (a.min(b), a.max(b));
-                m[e] = *mid.entry(key).or_insert_with(|| {
-                    let (p, q) = (v[a], v[b]);
-                    v.push(unit([
-                        (p[0] + q[0]) / 2.,
-                        (p[1] + q[1]) / 2.,
-                        (p[2] + q[2]) / 2.,
-                    ]));
-                    v.len() - 1
-                });
-            }
-            nf.push([tri[0], m[0], m[2]]);
-            nf.push([tri[1], m[1], m[0]]);
-            nf.push([tri[2], m[2], m[1]]);
-            nf.push([m[0], m[1], m[2]]);
-        }
-        f = nf;
-    }
-    f.iter().map(|t| [v[t[0]], v[t[1]], v[t[2]]]).collect()
+fn icosphere(levels: u32) -> Vec<[[f64; 3]; 3]> {
+    let m = ndtrace::shapes::icosphere(levels);
+    (0..m.simplices.len())
+        .map(|i| m.simplex_points(i))
+        .collect()
 }
 
 /// Runs `f` and returns (wall seconds, thread CPU seconds or wall seconds).

@@ -285,7 +285,7 @@ mod tests {
     use super::*;
     use crate::geometry::hyperplane;
     use crate::linalg::mat_vec;
-    use crate::shapes::{cross_polytope, hypercube, simplex_boundary, sphere};
+    use crate::shapes::{cross_polytope, hypercube, icosphere, simplex_boundary, sphere};
     use crate::testutil::{for_each_dim, random_rotation, random_vector, rng, TestRng};
     use rand::Rng;
 
@@ -332,73 +332,6 @@ mod tests {
     fn flipped<const N: usize>(mut m: Mesh<N>) -> Mesh<N> {
         m.simplices.iter_mut().for_each(|s| s.swap(0, 1));
         m
-    }
-
-    /// The icosphere: the icosahedron with every triangle split in four `subdivisions` times,
-    /// new vertices pushed onto the unit sphere (a strictly convex polyhedron, unlike
-    /// [`sphere`], whose Kuhn diagonals are reflex on some lattice squares).
-    fn icosphere(subdivisions: u32) -> Mesh<3> {
-        let t = (1.0 + 5f64.sqrt()) / 2.0;
-        let mut v: Vec<Vector<3>> = [
-            [-1., t, 0.],
-            [1., t, 0.],
-            [-1., -t, 0.],
-            [1., -t, 0.],
-            [0., -1., t],
-            [0., 1., t],
-            [0., -1., -t],
-            [0., 1., -t],
-            [t, 0., -1.],
-            [t, 0., 1.],
-            [-t, 0., -1.],
-            [-t, 0., 1.],
-        ]
-        .iter()
-        .map(|p| scale(p, 1.0 / norm(p)))
-        .collect();
-        let mut f: Vec<[u32; 3]> = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        for _ in 0..subdivisions {
-            let mut mid = std::collections::HashMap::new();
-            let mut m = |a: u32, b: u32, v: &mut Vec<Vector<3>>| {
-                *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                    let p = add(&v[a as usize], &v[b as usize]);
-                    v.push(scale(&p, 1.0 / norm(&p)));
-                    (v.len() - 1) as u32
-                })
-            };
-            f = f
-                .iter()
-                .flat_map(|&[a, b, c]| {
-                    let (ab, bc, ca) = (m(a, b, &mut v), m(b, c, &mut v), m(c, a, &mut v));
-                    [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-                })
-                .collect();
-        }
-        Mesh {
-            vertices: v,
-            simplices: f,
-        }
     }
 
     /// `shape` and its image under a random affine map, each in both orientations, with the
@@ -455,7 +388,10 @@ mod tests {
         for_each_dim!(generated_shapes_are_convex);
         let mut r = rng(4199);
         for s in 0..4 {
-            for (mesh, below) in variants(&mut r, icosphere(s)) {
+            let ico = icosphere(s);
+            assert_eq!(ico.simplices.len(), 20 << (2 * s));
+            assert!(ico.vertices.iter().all(|v| (norm(v) - 1.0).abs() < 1e-15));
+            for (mesh, below) in variants(&mut r, ico) {
                 assert_eq!(certify(&mesh), Some(below), "icosphere {s}");
                 assert!(supported_everywhere(&mesh, Some(below)), "icosphere {s}");
             }

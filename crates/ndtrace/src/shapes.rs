@@ -134,6 +134,78 @@ pub fn sphere<const N: usize>(subdivisions: u32) -> Mesh<N> {
     cube_lattice_surface::<N>(1 << subdivisions, true)
 }
 
+/// The icosphere (N = 3): the icosahedron with every triangle split in four `subdivisions`
+/// times, each new vertex the midpoint of an edge pushed onto the unit sphere; 20·4^s triangles,
+/// oriented outward. Unlike [`sphere`], whose Kuhn diagonals are reflex on some lattice squares,
+/// it is strictly convex at every edge.
+pub fn icosphere(subdivisions: u32) -> Mesh<3> {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let unit = |p: &Vector<3>| scale(p, 1.0 / norm(p));
+    let mut vertices: Vec<Vector<3>> = [
+        [-1., t, 0.],
+        [1., t, 0.],
+        [-1., -t, 0.],
+        [1., -t, 0.],
+        [0., -1., t],
+        [0., 1., t],
+        [0., -1., -t],
+        [0., 1., -t],
+        [t, 0., -1.],
+        [t, 0., 1.],
+        [-t, 0., -1.],
+        [-t, 0., 1.],
+    ]
+    .iter()
+    .map(unit)
+    .collect();
+    let mut simplices: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..subdivisions {
+        let mut mid = std::collections::HashMap::new();
+        let mut m = |a: u32, b: u32, v: &mut Vec<Vector<3>>| {
+            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                v.push(unit(&scale(&add(&v[a as usize], &v[b as usize]), 0.5)));
+                (v.len() - 1) as u32
+            })
+        };
+        simplices = simplices
+            .iter()
+            .flat_map(|&[a, b, c]| {
+                let (ab, bc, ca) = (
+                    m(a, b, &mut vertices),
+                    m(b, c, &mut vertices),
+                    m(c, a, &mut vertices),
+                );
+                [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+            })
+            .collect();
+    }
+    Mesh {
+        vertices,
+        simplices,
+    }
+}
+
 /// Per-vertex unit normals for interpolated shading (section "Normals and the Cross-Product",
 /// after eq. 6: "compute the normal at each vertex, e.g. by averaging the normals of all
 /// neighboring simplexes and normalizing").
