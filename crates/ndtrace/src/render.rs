@@ -492,9 +492,9 @@ impl<const N: usize> Work<N> {
 
 /// N-D Lambert + Blinn–Phong (course notes Part II(B)): calls `emit` per light that faces the
 /// surface, in light order, with its index, its colour contribution and the shadow ray that
-/// decides whether it counts (none when nothing could block it). The intensity of a light is the dot product of the
-/// unit normal with the unit vector toward it, clamped at 0 (lights behind the surface
-/// contribute nothing and need no shadow ray). `dir_len` is |ray.dir|.
+/// decides whether it counts (none when nothing could block it). The intensity of a light is
+/// the dot product of the unit normal with the unit vector toward it, clamped at 0 (lights
+/// behind the surface contribute nothing and need no shadow ray). `dir_len` is |ray.dir|.
 #[inline(always)]
 fn light_terms<const N: usize>(
     scene: &Scene<N>,
