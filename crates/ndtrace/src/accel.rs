@@ -416,11 +416,13 @@ fn f32_down(x: f64) -> f32 {
 #[inline]
 fn f32_up(x: f64) -> f32 {
     let f = x as f32;
-    if (f as f64) < x {
-        f.next_up()
-    } else {
-        f
-    }
+    // Without a branch (it would go each way half the time): one step up is one ulp away from
+    // zero for f ≥ +0 and towards zero for f < 0 (−∞ steps to −f32::MAX). −0 never steps
+    // (x ≤ 0 when it rounds to −0), nor do +∞ and NaN (the comparison is false).
+    let step = u32::from((f as f64) < x);
+    let bits = f.to_bits();
+    let neg = bits >> 31;
+    f32::from_bits(bits.wrapping_add(step).wrapping_sub(2 * (step & neg)))
 }
 
 /// `t` widened by `T_PAD` relative (upward).
@@ -1637,6 +1639,10 @@ impl<const N: usize> Bvh<N> {
     /// they are popped nearest first). A child's entry parameter is the smallest among its rays.
     /// Without `NEAREST_FIRST` (any-hit queries, whose answer does not depend on the order) the
     /// children go in slot order, unsorted, and those whose ids all lie in `skip` are dropped.
+    /// Leaves met are not sorted either when no inner node is met with them: the nearest hit
+    /// does not depend on the order (see [`Bvh::closest_hit`]), sorting a few leaves costs
+    /// unpredictable branches, and it saves few block tests (1.99 against 1.95 per ray on an
+    /// icosphere of 1.3 M triangles).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn descend<const AVX: bool, const P: usize, const NEAREST_FIRST: bool>(
@@ -1676,8 +1682,13 @@ impl<const N: usize> Bvh<N> {
             let l = mask.trailing_zeros() as usize;
             return (nd.child[l], rays_of(l));
         }
-        if !NEAREST_FIRST {
-            // Any order finds the same answer (shadow rays): children in slot order.
+        // The slots holding leaves (or nothing): those whose reference has the `LEAF` bit.
+        let mut leafy = 0u32;
+        for l in 0..NW {
+            leafy |= u32::from(nd.child[l] & LEAF != 0) << l;
+        }
+        if !NEAREST_FIRST || mask & !leafy == 0 {
+            // Any order finds the same answer (shadow rays, leaves): children in slot order.
             let mut rest = mask & (mask - 1);
             while rest != 0 {
                 let l = rest.trailing_zeros() as usize;
@@ -1967,25 +1978,19 @@ unsafe fn slabs_avx2<const N: usize, const P: usize>(
     let mut test = |q: usize, dn: &[__m256; N], df: &[__m256; N]| {
         stats::count(2);
         let p = &packet.pre[q];
-        let mut near = [_mm256_set1_ps(lo); N];
-        let mut far = [_mm256_set1_ps(limit[q]); N];
+        // A running max/min from [lo, limit]: maxps/minps return their second operand when
+        // either is NaN, so a NaN parameter leaves its slab unrestricted, as in `RayPre::slab`
+        // (whose pairwise reduction of exact max/min gives the same values).
+        let mut near = _mm256_set1_ps(lo);
+        let mut far = _mm256_set1_ps(limit[q]);
         for i in 0..N {
             let inv = _mm256_set1_ps(p.inv[i]);
-            near[i] = _mm256_max_ps(_mm256_mul_ps(dn[i], inv), near[i]);
-            far[i] = _mm256_min_ps(_mm256_mul_ps(df[i], inv), far[i]);
+            near = _mm256_max_ps(_mm256_mul_ps(dn[i], inv), near);
+            far = _mm256_min_ps(_mm256_mul_ps(df[i], inv), far);
         }
-        let mut m = N;
-        while m > 1 {
-            let half = m.div_ceil(2);
-            for j in 0..m / 2 {
-                near[j] = _mm256_max_ps(near[j], near[j + half]);
-                far[j] = _mm256_min_ps(far[j], far[j + half]);
-            }
-            m = half;
-        }
-        let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near[0], far[0]);
+        let hit = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
         met |= (_mm256_movemask_ps(hit) as u64) << (8 * q);
-        tn = _mm256_min_ps(tn, _mm256_blendv_ps(inf, near[0], hit));
+        tn = _mm256_min_ps(tn, _mm256_blendv_ps(inf, near, hit));
     };
     // The planes `bn` (entered) and `bf` (left) relative to the origin of ray q.
     let rel = |q: usize, bn: &[__m256; N], bf: &[__m256; N]| {
@@ -2794,6 +2799,39 @@ mod tests {
             assert!(a.node_count() > 1 && a.memory_bytes() > 0);
         }
         for_each_dim!(check);
+    }
+
+    #[test]
+    fn f32_up_is_the_smallest_f32_not_below() {
+        let mut r = rng(77);
+        let tiny = f64::from(f32::from_bits(1));
+        let big = f64::from(f32::MAX) * (1.0 + 1e-12);
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            1e-50,
+            -1e-50,
+            0.5 * tiny,
+            -0.5 * tiny,
+            1.0,
+            -1.0,
+            big,
+            -big,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for _ in 0..20000 {
+            let x = r.random_range(-1.0..1.0) * 2f64.powi(r.random_range(-160..160));
+            xs.extend([x, f64::from(x as f32)]);
+        }
+        for x in xs {
+            let f = x as f32;
+            let want = if (f as f64) < x { f.next_up() } else { f };
+            assert_eq!(f32_up(x).to_bits(), want.to_bits(), "x = {x:e}");
+            assert!(f64::from(f32_up(x)) >= x, "x = {x:e}");
+        }
     }
 
     #[test]
