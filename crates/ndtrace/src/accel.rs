@@ -107,14 +107,21 @@ const SLAB_REL: f64 = 1.0 / (1u32 << 20) as f64;
 /// Relative padding of each simplex's box, covering the `BARY_SLACK` band around it (a point
 /// with `t_k ≥ −BARY_SLACK` is at most `BARY_SLACK·diameter` outside the simplex, and
 /// `diameter ≤ √N·max extent ≤ 3·max extent`).
-const BOX_PAD: f64 = 1e-8;
+pub(crate) const BOX_PAD: f64 = 1e-8;
 /// Child slot tag of a leaf (block index in the low bits).
 const LEAF: u32 = 1 << 31;
 /// An unused child slot (its box is empty, so it is never entered).
 const EMPTY: u32 = u32::MAX;
 
-/// Traversal counters (feature `traversal-stats`; no-ops without it).
+/// Traversal counters: global with the feature `traversal-stats`, per thread in unit tests (so
+/// that a test can check what a query visits), no-ops otherwise.
 mod stats {
+    #[cfg(test)]
+    thread_local! {
+        /// This thread's counts, as in `VISITS`.
+        pub static LOCAL: std::cell::Cell<[u64; 3]> = const { std::cell::Cell::new([0; 3]) };
+    }
+
     #[cfg(feature = "traversal-stats")]
     use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -128,6 +135,12 @@ mod stats {
     pub fn count(_k: usize) {
         #[cfg(feature = "traversal-stats")]
         VISITS[_k].fetch_add(1, Ordering::Relaxed);
+        #[cfg(test)]
+        LOCAL.with(|c| {
+            let mut v = c.get();
+            v[_k] += 1;
+            c.set(v);
+        });
     }
 }
 
@@ -2559,6 +2572,10 @@ mod tests {
             "N={N}: no inner subtree holds only the first cluster"
         );
         let mut blocked = [0; 3];
+        // Nodes visited plus blocks tested, skipping the first cluster by id range (pruned)
+        // and by filter (not pruned): the same answers, less work.
+        let mut work = [0u64; 2];
+        let visits = || stats::LOCAL.with(|c| c.get()[0] + c.get()[1]);
         for case in 0..200 {
             let rays = packet_rays(&mut r, &s, case % 3, 1 + case % PACKET);
             let tmax: Vec<f64> = rays.iter().map(|_| r.random_range(0.5..3.0)).collect();
@@ -2587,11 +2604,27 @@ mod tests {
                 if k < 3 {
                     blocked[k] += want.iter().filter(|&&b| b).count();
                 }
+                if skip == (0..150) {
+                    let mut filtered = vec![false; rays.len()];
+                    let before = visits();
+                    bvh.any_hits(&rays, 0.0, &tmax, |id| id >= 150, 0..0, &mut filtered);
+                    let between = visits();
+                    bvh.any_hits(&rays, 0.0, &tmax, |_| true, skip.clone(), &mut got);
+                    work[0] += visits() - between;
+                    work[1] += between - before;
+                    assert_eq!(filtered, want);
+                }
             }
         }
         assert!(
             blocked.iter().all(|&b| b > 20),
             "N={N}: {blocked:?} rays blocked"
+        );
+        assert!(
+            work[0] * 4 < work[1] * 3,
+            "N={N}: {} nodes and blocks visited when skipping ids 0..150, {} when filtering them",
+            work[0],
+            work[1]
         );
     }
 

@@ -8,7 +8,7 @@
 //! on the rays it travels with. Every cell's result depends only on the scene, the seed and the
 //! cell index, so the retina is bit-identical whatever the number of threads.
 
-use crate::accel::{Hit, Ray, PACKET};
+use crate::accel::{Hit, Ray, BOX_PAD, PACKET};
 use crate::linalg::{add_scaled, dot, norm, scale, sub, Vector};
 use crate::scene::desc::RenderMode;
 use crate::scene::{Light, Scene};
@@ -490,6 +490,15 @@ impl<const N: usize> Work<N> {
     }
 }
 
+/// Shadow rays start this fraction of the scene's diagonal off the surface, toward the light.
+/// The inside test widens every simplex, within its hyperplane, by its `BARY_SLACK` band: at
+/// most [`BOX_PAD`] of the simplex's extent, so of the scene's, beyond its boundary. A hit in
+/// that band just past a convex ridge, moved off by ten times the band or more (checked at
+/// compile time), lies on the outer side of the neighbouring simplex too, for folds up to
+/// atan(10) ≈ 84° between the two hyperplanes; so the shadow ray does not start behind it.
+const SHADOW_OFFSET: f64 = 1e-7;
+const _: () = assert!(SHADOW_OFFSET >= 10.0 * BOX_PAD);
+
 /// N-D Lambert + Blinn–Phong (course notes Part II(B)): calls `emit` per light that faces the
 /// surface, in light order, with its index, its colour contribution and the shadow ray that
 /// decides whether it counts (none when nothing could block it). The intensity of a light is
@@ -516,7 +525,7 @@ fn light_terms<const N: usize>(
         .any(|&s| s > 0.0)
         .then(|| scale(&ray.dir, -1.0 / dir_len));
     let flat = hit.normal;
-    let eps = 1e-7 * scene.extent;
+    let eps = SHADOW_OFFSET * scene.extent;
     for (index, light) in scene.lights.iter().enumerate() {
         let (l, dist, color, atten) = match light {
             Light::Directional { direction, color } => (*direction, f64::INFINITY, color, 1.0),
