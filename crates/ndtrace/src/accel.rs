@@ -22,7 +22,8 @@
 //! ## BVH
 //! [`Bvh`] is built as a binary tree of N-D axis-aligned boxes with binned SAH (16 bins per axis
 //! over the centroid bounds, leaves of at most 4 simplices, object-median split when SAH cannot
-//! split or the tree gets deep), then collapsed into an 8-wide tree:
+//! split or the tree gets deep), then collapsed into an 8-wide tree (the optimal collapse of
+//! Ylitie et al., which minimises the summed surface measure of the wide nodes):
 //!
 //! * nodes (a `Vec`, depth-first order) hold the boxes of their up to 8 children as
 //!   structure-of-arrays `f32` (rounded outward, so conservative), slab-tested together
@@ -1151,9 +1152,133 @@ fn flatten<const N: usize>(b: Built<N>, out: &mut Vec<BNode<N>>) {
     }
 }
 
+/// The binary SAH tree over the simplices of the given bounds (each padded by [`BOX_PAD`] of
+/// its largest extent), in depth-first order, and the leaf order (`idx[j]`: the input index of
+/// the j-th simplex in leaf order). Forks with rayon above `par_min` simplices.
+fn binary_tree<const N: usize>(
+    bounds: Vec<Bounds<N>>,
+    par_min: usize,
+) -> (Vec<BNode<N>>, Vec<u32>) {
+    let n = bounds.len();
+    // Pad each box by BOX_PAD of its largest extent, so that it contains the BARY_SLACK band.
+    let padded: Vec<(Vector<N>, Vector<N>)> = bounds
+        .into_iter()
+        .map(|(lo, hi)| {
+            let ext = (0..N).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
+            let pad = BOX_PAD * ext;
+            (
+                std::array::from_fn(|i| lo[i] - pad),
+                std::array::from_fn(|i| hi[i] + pad),
+            )
+        })
+        .collect();
+    let cent = padded
+        .iter()
+        .map(|(lo, hi)| std::array::from_fn(|i| 0.5 * (lo[i] + hi[i])))
+        .collect();
+    let builder = Builder {
+        bounds: padded,
+        cent,
+        par_min: par_min.max(2),
+    };
+    let mut idx: Vec<u32> = (0..n as u32).collect();
+    let built = builder.build_par(&mut idx, 0, 0);
+    drop(builder);
+    let mut bin = Vec::new();
+    flatten(built, &mut bin);
+    (bin, idx)
+}
+
+/// How each binary subtree is laid out in the wide tree: the optimal collapse of Ylitie,
+/// Karras and Laine ("Efficient incoherent ray traversal on GPUs through compressed wide BVHs",
+/// HPG 2017, §4.1), a dynamic program over the binary tree.
+///
+/// The leaves are the binary tree's and each is tested exactly when its own box is met, so
+/// the collapse only decides which binary inner nodes become wide nodes. A ray visits a wide
+/// node (one slab test of all its slots, whatever their number) with probability proportional
+/// to the node's [`half_area`], so the plan minimises the sum of the wide nodes' half areas.
+/// With `S(b, k)` the least cost of holding subtree b in at most k slots of its parent:
+///
+/// * a leaf takes one slot at no cost: `S(b, k) = 0`;
+/// * an inner node in one slot is the root of a wide node: `S(b, 1) = A(b) + D(b, 8)`, where
+///   `D(b, k) = min_{1 ≤ j < k} S(left, j) + S(right, k − j)` shares k slots between its
+///   children;
+/// * with more slots it may also be opened: `S(b, k) = min(S(b, k − 1), D(b, k))`.
+///
+/// The greedy rule (open the child of largest area until 8 slots are used) leaves a small wide
+/// node wherever a subtree did not fit: 66% of the nodes of a 1.3 M-triangle icosphere held 2
+/// leaves.
+struct Plan {
+    /// `slots[b][k − 1]`: how subtree b fills at most k slots: `[0, 0]` in one slot (a leaf
+    /// or a wide node's root), else `[j, m]`, j slots to the left child and m to the right.
+    slots: Vec<[[u8; 2]; NW]>,
+    /// The split of the `NW` slots of the wide node rooted at inner node b.
+    wide: Vec<[u8; 2]>,
+}
+
+impl Plan {
+    fn new<const N: usize>(bin: &[BNode<N>]) -> Self {
+        let n = bin.len();
+        let mut cost = vec![[0.0f64; NW]; n];
+        let mut slots = vec![[[0u8; 2]; NW]; n];
+        let mut wide = vec![[0u8; 2]; n];
+        // Children come after their parent in depth-first order: one pass from the end.
+        for b in (0..n).rev() {
+            if bin[b].count > 0 {
+                continue;
+            }
+            let (l, r) = (b + 1, bin[b].first as usize);
+            // The best sharing of k slots between the children (ties: fewest to the left).
+            let share = |k: usize| {
+                let mut best = (f64::INFINITY, [1u8, (k - 1) as u8]);
+                for j in 1..k {
+                    let c = cost[l][j - 1] + cost[r][k - j - 1];
+                    if c < best.0 {
+                        best = (c, [j as u8, (k - j) as u8]);
+                    }
+                }
+                best
+            };
+            let (d, w) = share(NW);
+            let mut row = [(0.0, [0u8; 2]); NW];
+            // A NaN area (from infinite bounds) counts as infinite.
+            let area = half_area(&bin[b].min.map(f64::from), &bin[b].max.map(f64::from));
+            row[0].0 = if area.is_nan() { f64::INFINITY } else { area } + d;
+            for k in 2..=NW {
+                let (c, how) = share(k);
+                // Opening b must gain: on a tie, fewer slots.
+                row[k - 1] = if c < row[k - 2].0 {
+                    (c, how)
+                } else {
+                    row[k - 2]
+                };
+            }
+            wide[b] = w;
+            for k in 0..NW {
+                cost[b][k] = row[k].0;
+                slots[b][k] = row[k].1;
+            }
+        }
+        Plan { slots, wide }
+    }
+
+    /// Appends to `kids`, in left-to-right order, the binary nodes that subtree b puts in its
+    /// at most k slots.
+    fn expand<const N: usize>(&self, bin: &[BNode<N>], b: usize, k: usize, kids: &mut Vec<usize>) {
+        match self.slots[b][k - 1] {
+            [0, _] => kids.push(b),
+            [j, m] => {
+                self.expand(bin, b + 1, j as usize, kids);
+                self.expand(bin, bin[b].first as usize, m as usize, kids);
+            }
+        }
+    }
+}
+
 /// Collapses the binary tree into wide nodes and blocks (both in depth-first order).
 struct Collapse<'a, const N: usize> {
     bin: &'a [BNode<N>],
+    plan: Plan,
     /// The input simplices and ids, and the leaf order: `order[j]` is the input index of the
     /// j-th simplex in leaf order.
     prims: &'a [PreparedSimplex<N>],
@@ -1164,11 +1289,6 @@ struct Collapse<'a, const N: usize> {
 }
 
 impl<const N: usize> Collapse<'_, N> {
-    fn area(&self, b: usize) -> f64 {
-        let nd = &self.bin[b];
-        half_area(&nd.min.map(f64::from), &nd.max.map(f64::from))
-    }
-
     /// The reference (node index or `LEAF | block`) of binary node `b`'s subtree.
     fn child_ref(&mut self, b: usize) -> u32 {
         if self.bin[b].count > 0 {
@@ -1203,25 +1323,15 @@ impl<const N: usize> Collapse<'_, N> {
         LEAF | (self.blocks.len() - 1) as u32
     }
 
-    /// A wide node over binary inner node `b`: its children, with the inner child of largest
-    /// area repeatedly replaced by its two children (in place, keeping the left-to-right order)
-    /// until there are `NW` or only leaves.
+    /// The wide node over binary inner node `b`: its children as the [`Plan`] lays them out,
+    /// in left-to-right order.
     fn node(&mut self, b: usize) -> u32 {
-        let mut kids: Vec<usize> = vec![b + 1, self.bin[b].first as usize];
-        while kids.len() < NW {
-            let mut pick: Option<(f64, usize)> = None;
-            for (j, &c) in kids.iter().enumerate() {
-                if self.bin[c].count == 0 {
-                    let a = self.area(c);
-                    if pick.is_none_or(|(pa, _)| a > pa) {
-                        pick = Some((a, j));
-                    }
-                }
-            }
-            let Some((_, j)) = pick else { break };
-            let c = kids[j];
-            kids.splice(j..=j, [c + 1, self.bin[c].first as usize]);
-        }
+        let [j, m] = self.plan.wide[b];
+        let mut kids = Vec::with_capacity(NW);
+        self.plan.expand(self.bin, b + 1, j as usize, &mut kids);
+        self.plan
+            .expand(self.bin, self.bin[b].first as usize, m as usize, &mut kids);
+        debug_assert!((2..=NW).contains(&kids.len()));
         let me = self.nodes.len();
         self.nodes.push(Node::EMPTY);
         for (l, &c) in kids.iter().enumerate() {
@@ -1319,34 +1429,11 @@ impl<const N: usize> Bvh<N> {
                 ranges: Vec::new(),
             };
         }
-        // Pad each box by BOX_PAD of its largest extent, so that it contains the BARY_SLACK band.
-        let padded: Vec<(Vector<N>, Vector<N>)> = bounds
-            .into_iter()
-            .map(|(lo, hi)| {
-                let ext = (0..N).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
-                let pad = BOX_PAD * ext;
-                (
-                    std::array::from_fn(|i| lo[i] - pad),
-                    std::array::from_fn(|i| hi[i] + pad),
-                )
-            })
-            .collect();
-        let cent = padded
-            .iter()
-            .map(|(lo, hi)| std::array::from_fn(|i| 0.5 * (lo[i] + hi[i])))
-            .collect();
-        let builder = Builder {
-            bounds: padded,
-            cent,
-            par_min: par_min.max(2),
-        };
-        let mut idx: Vec<u32> = (0..n as u32).collect();
-        let built = builder.build_par(&mut idx, 0, 0);
-        drop(builder);
-        let mut bin = Vec::new();
-        flatten(built, &mut bin);
+        let (bin, idx) = binary_tree(bounds, par_min);
+        let plan = Plan::new(&bin);
         let mut c = Collapse {
             bin: &bin,
+            plan,
             prims: &prims,
             ids: &ids,
             order: &idx,
@@ -2879,6 +2966,91 @@ mod tests {
             assert!(a.node_count() > 1 && a.memory_bytes() > 0);
         }
         for_each_dim!(check);
+    }
+
+    /// The wide nodes (binary inner nodes) of the layout `plan` gives `bin`, each with its
+    /// children, from the root down.
+    fn wide_layout<const N: usize>(bin: &[BNode<N>], plan: &Plan) -> Vec<(usize, Vec<usize>)> {
+        let mut out = vec![];
+        let mut todo = vec![0];
+        while let Some(b) = todo.pop() {
+            let [j, m] = plan.wide[b];
+            let mut kids = vec![];
+            plan.expand(bin, b + 1, j as usize, &mut kids);
+            plan.expand(bin, bin[b].first as usize, m as usize, &mut kids);
+            todo.extend(kids.iter().filter(|&&c| bin[c].count == 0));
+            out.push((b, kids));
+        }
+        out
+    }
+
+    /// Against every way of choosing which binary inner nodes become wide nodes (the root
+    /// always; valid when each wide node has at most 8 children, its nearest descendants that
+    /// are leaves or wide nodes), the plan is valid and has the least summed half area.
+    fn wide_collapse_is_optimal<const N: usize>() {
+        let mut r = rng(4500 + N as u64);
+        let (mut cases, mut opened) = (0, 0);
+        while cases < 12 {
+            let count = r.random_range(30..70);
+            let s = soup::<N>(&mut r, count);
+            let bounds: Vec<Bounds<N>> = s.iter().map(|(p, _)| simplex_bounds(p)).collect();
+            let (bin, _) = binary_tree(bounds, PAR_MIN);
+            let area = |b: usize| half_area(&bin[b].min.map(f64::from), &bin[b].max.map(f64::from));
+            let inner: Vec<usize> = (1..bin.len()).filter(|&b| bin[b].count == 0).collect();
+            if bin[0].count > 0 || inner.len() > 15 {
+                continue;
+            }
+            cases += 1;
+            let plan = Plan::new(&bin);
+            let layout = wide_layout(&bin, &plan);
+            let mut leaves = 0;
+            for (_, kids) in &layout {
+                assert!(
+                    (2..=NW).contains(&kids.len()),
+                    "N={N}: {} children",
+                    kids.len()
+                );
+                leaves += kids.iter().filter(|&&c| bin[c].count > 0).count();
+            }
+            let binary_leaves = bin.iter().filter(|b| b.count > 0).count();
+            assert_eq!(leaves, binary_leaves, "N={N}: every leaf exactly once");
+            let cost: f64 = layout.iter().map(|(b, _)| area(*b)).sum();
+            // Brute force over the subsets of the non-root inner nodes.
+            fn slots<const N: usize>(bin: &[BNode<N>], wide: &[bool], c: usize) -> usize {
+                if bin[c].count > 0 || wide[c] {
+                    1
+                } else {
+                    slots(bin, wide, c + 1) + slots(bin, wide, bin[c].first as usize)
+                }
+            }
+            let mut best = f64::INFINITY;
+            let mut wide = vec![false; bin.len()];
+            for set in 0u32..1 << inner.len() {
+                for (k, &b) in inner.iter().enumerate() {
+                    wide[b] = set >> k & 1 == 1;
+                }
+                wide[0] = true;
+                let roots = (0..bin.len()).filter(|&b| wide[b]);
+                let valid = roots.clone().all(|b| {
+                    slots(&bin, &wide, b + 1) + slots(&bin, &wide, bin[b].first as usize) <= NW
+                });
+                if valid {
+                    best = best.min(roots.map(area).sum());
+                }
+            }
+            assert!(
+                (cost - best).abs() <= 1e-12 * best,
+                "N={N}: plan {cost}, best {best}"
+            );
+            opened += (layout.len() < inner.len() + 1) as usize;
+        }
+        // The cases are not trivial: some inner nodes were opened into their parents.
+        assert!(opened > 0, "N={N}: no inner node was ever opened");
+    }
+
+    #[test]
+    fn accel_wide_collapse_is_optimal() {
+        for_each_dim!(wide_collapse_is_optimal);
     }
 
     #[test]
