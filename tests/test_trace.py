@@ -799,6 +799,37 @@ def test_thread_count_does_not_change_the_result():
     assert (a.rgba[..., 3] == b.rgba[..., 3]).mean() > 0.8
 
 
+def test_freed_retinas_lend_their_buffers_to_the_next_trace_cleared():
+    """Once numpy frees a retina's arrays, the next trace reuses their memory (no fresh pages
+    to fault in) and clears it: a retina with many hits, freed, then one of the same shape
+    that sees nothing must hold no trace of the first (normals are never written on a miss)."""
+    import gc
+
+    n = 4
+    full = busy_scene(n=n, res=20)
+    empty = (ndtrace.Scene(n)
+             .set_camera([0.7, 1.1, 1.9, 4.0], look_at=[0] * n, up=np.eye(n)[1:n - 1].tolist(),
+                         fov=50, resolution=20)
+             .add_object("sphere", subdivisions=1, transform=[{"translate": [0, 0, 0, 50.0]}]))
+    ndtrace.release_buffers()
+    a = ndtrace.trace(full, threads=1)
+    assert a.hit.sum() > 100 and np.abs(a.normal).sum() > 100
+    assert ndtrace.release_buffers() == 0  # nothing kept while the arrays live
+    del a
+    gc.collect()
+    b = ndtrace.trace(empty, threads=1)
+    # b took every buffer that freeing a's arrays handed back.
+    assert ndtrace.release_buffers() == 0
+    assert b.hit.sum() == 0
+    assert (b.rgba == 0).all() and (b.normal == 0).all() and np.isinf(b.depth).all()
+    assert (b.object_id == -1).all() and (b.primitive_id == -1).all()
+    kept = b.rgba.nbytes + b.depth.nbytes + b.normal.nbytes + b.object_id.nbytes + b.primitive_id.nbytes
+    del b
+    gc.collect()
+    assert ndtrace.release_buffers() == kept
+    assert ndtrace.release_buffers() == 0
+
+
 def test_threads_argument_is_checked():
     scene = busy_scene(res=4)
     for bad in (0, -1, 1.5, "2"):

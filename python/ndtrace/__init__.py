@@ -9,6 +9,7 @@ from . import geometry
 from . import rotation
 from . import frames
 from .retina import Retina, trace
+from ._ndtrace import release_buffers
 from .composite import composite
 from .files import read_exr, write_exr, write_png
 from .scene import Scene, load_dict, load_file, load_toml
@@ -20,6 +21,6 @@ MIN_DIM: int = _ndtrace.MIN_DIM
 MAX_DIM: int = _ndtrace.MAX_DIM
 
 __all__ = [
-    "geometry", "rotation", "frames", "Scene", "Retina", "trace", "composite", "read_exr", "write_exr", "write_png", "load_file", "load_dict", "load_toml", "animation", "animate",
+    "geometry", "rotation", "frames", "Scene", "Retina", "trace", "release_buffers", "composite", "read_exr", "write_exr", "write_png", "load_file", "load_dict", "load_toml", "animation", "animate",
     "MIN_DIM", "MAX_DIM", "__version__",
 ]

@@ -2,10 +2,12 @@
 //! class (a validated description plus its built, traceable scene and BVH).
 
 use crate::errors::to_py_err;
+use ndtrace::pool;
 use ndtrace::render::{self, Progress, Retina};
 use ndtrace::scene::{self, AnyScene, SceneDesc};
 use ndtrace::{with_scene, NdError};
-use numpy::{PyArray1, PyArrayMethods};
+use numpy::ndarray::{ArrayViewMutD, IxDyn};
+use numpy::PyArrayDyn;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -157,21 +159,90 @@ pub(crate) fn retina_dict(py: Python<'_>, r: Retina) -> PyResult<Bound<'_, PyDic
         s
     };
     d.set_item("dim", r.dim)?;
-    d.set_item("rgba", PyArray1::from_vec(py, r.rgba).reshape(with(4))?)?;
-    d.set_item("depth", PyArray1::from_vec(py, r.depth).reshape(with(0))?)?;
-    d.set_item(
-        "normal",
-        PyArray1::from_vec(py, r.normal).reshape(with(r.dim))?,
-    )?;
-    d.set_item(
-        "object_id",
-        PyArray1::from_vec(py, r.object_id).reshape(with(0))?,
-    )?;
-    d.set_item(
-        "primitive_id",
-        PyArray1::from_vec(py, r.primitive_id).reshape(with(0))?,
-    )?;
+    d.set_item("rgba", handed(py, r.rgba, &with(4))?)?;
+    d.set_item("depth", handed(py, r.depth, &with(0))?)?;
+    d.set_item("normal", handed(py, r.normal, &with(r.dim))?)?;
+    d.set_item("object_id", handed(py, r.object_id, &with(0))?)?;
+    d.set_item("primitive_id", handed(py, r.primitive_id, &with(0))?)?;
     Ok(d)
+}
+
+/// A retina output buffer owned by the numpy array that views it (its base object); when numpy
+/// frees the array, the buffer goes back to [`pool`] for the next trace to reuse.
+#[pyclass(module = "ndtrace._ndtrace", frozen)]
+struct RetinaBuffer {
+    data: Buffer,
+}
+
+/// The buffer of a [`RetinaBuffer`], by element type.
+enum Buffer {
+    F32(Vec<f32>),
+    I32(Vec<i32>),
+    I64(Vec<i64>),
+}
+
+impl Drop for RetinaBuffer {
+    fn drop(&mut self) {
+        match std::mem::replace(&mut self.data, Buffer::F32(Vec::new())) {
+            Buffer::F32(v) => pool::recycle(v),
+            Buffer::I32(v) => pool::recycle(v),
+            Buffer::I64(v) => pool::recycle(v),
+        }
+    }
+}
+
+/// A retina element type that a [`RetinaBuffer`] holds.
+trait Handed: numpy::Element + pool::Pooled {
+    fn wrap(v: Vec<Self>) -> Buffer;
+}
+
+impl Handed for f32 {
+    fn wrap(v: Vec<Self>) -> Buffer {
+        Buffer::F32(v)
+    }
+}
+
+impl Handed for i32 {
+    fn wrap(v: Vec<Self>) -> Buffer {
+        Buffer::I32(v)
+    }
+}
+
+impl Handed for i64 {
+    fn wrap(v: Vec<Self>) -> Buffer {
+        Buffer::I64(v)
+    }
+}
+
+/// `v` as a C-contiguous numpy array of `shape` (no copy), owned by a [`RetinaBuffer`].
+fn handed<'py, T: Handed>(
+    py: Python<'py>,
+    mut v: Vec<T>,
+    shape: &[usize],
+) -> PyResult<Bound<'py, PyArrayDyn<T>>> {
+    if shape.iter().product::<usize>() != v.len() {
+        return Err(PyValueError::new_err(format!(
+            "retina buffer of {} elements does not have shape {shape:?}",
+            v.len()
+        )));
+    }
+    let ptr = v.as_mut_ptr();
+    let owner = Bound::new(py, RetinaBuffer { data: T::wrap(v) })?;
+    // SAFETY: `ptr` points to the `len` elements of the Vec now held by `owner`, which never
+    // touches, moves or reallocates them until it is dropped; `owner` becomes the array's base
+    // object, so it is dropped only after the array. The view is C-contiguous over exactly those
+    // elements (the product of `shape` is the length).
+    unsafe {
+        let view = ArrayViewMutD::from_shape_ptr(IxDyn(shape), ptr);
+        Ok(PyArrayDyn::borrow_from_array(&view, owner.into_any()))
+    }
+}
+
+/// Frees the output buffers kept from dropped retinas for reuse by later traces
+/// ([`pool`]); returns the bytes freed.
+#[pyfunction]
+fn release_buffers() -> usize {
+    pool::release()
 }
 
 /// Loads and builds a TOML scene file.
@@ -223,6 +294,7 @@ fn load_dict(
 /// Adds the scene functions and class.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<CompiledScene>()?;
+    m.add_function(wrap_pyfunction!(release_buffers, m)?)?;
     m.add_function(wrap_pyfunction!(load_file, m)?)?;
     m.add_function(wrap_pyfunction!(load_toml, m)?)?;
     m.add_function(wrap_pyfunction!(load_dict, m)?)?;

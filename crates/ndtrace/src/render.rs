@@ -10,6 +10,7 @@
 
 use crate::accel::{Hit, Ray, BOX_PAD, PACKET};
 use crate::linalg::{add_scaled, dot, norm, scale, sub, Vector};
+use crate::pool;
 use crate::scene::desc::RenderMode;
 use crate::scene::{Light, Scene};
 use crate::{NdError, NdResult};
@@ -132,13 +133,13 @@ where
 {
     let cam = &scene.camera;
     let cells = cam.cell_count();
-    // Zeroed allocations cost nothing up front (the pages are mapped as the parallel loop first
-    // writes them); the loop writes every cell's depth and ids, misses included.
-    let mut rgba = vec![0f32; cells * 4];
-    let mut depth = vec![0f32; cells];
-    let mut normal = vec![0f32; cells * N];
-    let mut object_id = vec![0i32; cells];
-    let mut primitive_id = vec![0i64; cells];
+    // Zeroed buffers, kept ones when the last retina's were handed back ([`crate::pool`]); the
+    // loop writes every cell's depth and ids, misses included.
+    let mut rgba = pool::zeroed::<f32>(cells * 4);
+    let mut depth = pool::zeroed::<f32>(cells);
+    let mut normal = pool::zeroed::<f32>(cells * N);
+    let mut object_id = pool::zeroed::<i32>(cells);
+    let mut primitive_id = pool::zeroed::<i64>(cells);
     let samples = scene.render.samples as usize;
     // Only the depth mode uses it (it reads every vertex).
     let depth_range = match scene.render.mode {
