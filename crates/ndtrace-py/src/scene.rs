@@ -196,23 +196,16 @@ trait Handed: numpy::Element + pool::Pooled {
     fn wrap(v: Vec<Self>) -> Buffer;
 }
 
-impl Handed for f32 {
-    fn wrap(v: Vec<Self>) -> Buffer {
-        Buffer::F32(v)
-    }
+macro_rules! handed {
+    ($($t:ty => $variant:ident),*) => {$(
+        impl Handed for $t {
+            fn wrap(v: Vec<Self>) -> Buffer {
+                Buffer::$variant(v)
+            }
+        }
+    )*};
 }
-
-impl Handed for i32 {
-    fn wrap(v: Vec<Self>) -> Buffer {
-        Buffer::I32(v)
-    }
-}
-
-impl Handed for i64 {
-    fn wrap(v: Vec<Self>) -> Buffer {
-        Buffer::I64(v)
-    }
-}
+handed!(f32 => F32, i32 => I32, i64 => I64);
 
 /// `v` as a C-contiguous numpy array of `shape` (no copy), owned by a [`RetinaBuffer`].
 fn handed<'py, T: Handed>(
