@@ -1245,7 +1245,8 @@ impl Plan {
             let area = half_area(&bin[b].min.map(f64::from), &bin[b].max.map(f64::from));
             row[0].0 = if area.is_nan() { f64::INFINITY } else { area } + d;
             for k in 2..=NW {
-                let (c, how) = share(k);
+                // D(b, NW) is already known.
+                let (c, how) = if k == NW { (d, w) } else { share(k) };
                 // Opening b must gain: on a tie, fewer slots.
                 row[k - 1] = if c < row[k - 2].0 {
                     (c, how)
