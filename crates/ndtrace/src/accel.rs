@@ -1794,6 +1794,10 @@ impl<const N: usize> Bvh<N> {
             while rest != 0 {
                 let l = rest.trailing_zeros() as usize;
                 rest &= rest - 1;
+                if NEAREST_FIRST {
+                    // Tested soon (unless a hit culls them): start fetching them now.
+                    prefetch_block(&self.blocks[(nd.child[l] & !LEAF) as usize]);
+                }
                 stack[*sp].write(Entry {
                     node: nd.child[l],
                     rays: rays_of(l),
@@ -1903,6 +1907,7 @@ impl<const N: usize> Bvh<N> {
             }
             if cur != EMPTY {
                 let block = &self.blocks[(cur & !LEAF) as usize];
+                prefetch_block(block);
                 let mut left = cur_rays;
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
@@ -1992,6 +1997,7 @@ impl<const N: usize> Bvh<N> {
             }
             if cur != EMPTY {
                 let block = &self.blocks[(cur & !LEAF) as usize];
+                prefetch_block(block);
                 let mut left = cur_rays & alive;
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
@@ -2185,6 +2191,26 @@ unsafe fn slab_ray<const N: usize>(
             *tn,
             _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), near, hit),
         );
+    }
+}
+
+/// Prefetches every cache line of a block (7 for N = 3, 408 bytes at any alignment). Its first
+/// lines (`x0`, `n̂`) are read at once, its last ones (the rows `r_k`, the ids) only once the t
+/// test passes, which otherwise makes a second cache miss in series with the first; and the
+/// blocks pushed for later arrive while the nearer ones are tested. On a 1.3 M-triangle
+/// icosphere at 512², a fifth of whose time went to waiting for blocks, this is about 3%
+/// faster (same results).
+#[inline(always)]
+fn prefetch_block<const N: usize>(block: &Block<N>) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        let p = block as *const Block<N> as *const i8;
+        let n = std::mem::size_of::<Block<N>>();
+        for off in (0..n).step_by(64).chain([n - 1]) {
+            // SAFETY: a prefetch never faults; the address lies within the block.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(off)) };
+        }
     }
 }
 
