@@ -799,10 +799,11 @@ def test_thread_count_does_not_change_the_result():
     assert (a.rgba[..., 3] == b.rgba[..., 3]).mean() > 0.8
 
 
-def test_freed_retinas_lend_their_buffers_to_the_next_trace_cleared():
+def test_freed_retinas_lend_their_buffers_to_the_next_trace_which_overwrites_them():
     """Once numpy frees a retina's arrays, the next trace reuses their memory (no fresh pages
-    to fault in) and clears it: a retina with many hits, freed, then one of the same shape
-    that sees nothing must hold no trace of the first (normals are never written on a miss)."""
+    to fault in, nothing cleared) and overwrites all of it: a retina with many hits, freed,
+    then one of the same shape that sees nothing must hold no trace of the first (misses
+    included: their normals are written as zeros)."""
     import gc
 
     n = 4

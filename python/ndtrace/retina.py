@@ -57,8 +57,9 @@ def trace(
     bit-identical whatever the thread count.
 
     The arrays own their memory. When numpy frees them, the buffers are kept (up to 256 MiB)
-    and reused, zeroed, by the next trace: writing to fresh memory costs page faults, a fifth
-    of a 4D trace at 128³. ``ndtrace.release_buffers()`` frees the kept buffers.
+    and reused by the next trace, which overwrites every element: writing to fresh memory
+    costs page faults, a fifth of a 4D trace at 128³. ``ndtrace.release_buffers()`` frees the
+    kept buffers.
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected an ndtrace.Scene, got {type(scene).__name__}")

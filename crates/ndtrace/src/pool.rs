@@ -5,8 +5,10 @@
 //! 2-core benchmark machines that costs about 2 µs per page: 18,000 faults and 30–50 ms of
 //! system time for the 96 MB of a 4D retina at 128³ (a fifth of its trace), 2,800 faults for
 //! a 512² image. Buffers handed back with [`recycle`] (the Python bindings do so when numpy
-//! frees a retina's arrays) are zero-filled and reused by the next trace instead, so a loop
-//! that traces, reads and drops its results only touches fresh memory on the first trace.
+//! frees a retina's arrays) are reused by the next trace instead, so a loop that traces, reads
+//! and drops its results only touches fresh memory on the first trace. They come back as they
+//! were, not cleared: the tracer writes every element of its outputs, and clearing 100 MB of
+//! a 4D retina at 128³ would cost another 5–10 ms per trace.
 //!
 //! At most [`KEEP_BUFFERS`] buffers per element type and [`KEEP_BYTES`] in all are kept;
 //! [`release`] frees them.
@@ -49,7 +51,7 @@ fn bytes<T>(v: &Vec<T>) -> usize {
     v.capacity() * size_of::<T>()
 }
 
-/// A set of kept buffers; the tracer uses the process-wide one ([`zeroed`], [`recycle`],
+/// A set of kept buffers; the tracer uses the process-wide one ([`take`], [`recycle`],
 /// [`release`]).
 pub struct Pool(Mutex<Kept>);
 
@@ -75,9 +77,10 @@ impl Pool {
         self.0.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// A zeroed buffer of `len` elements: a kept one whose capacity is at least `len` and at
-    /// most twice it (the smallest such), zero-filled, else a new allocation.
-    pub fn zeroed<T: Pooled>(&self, len: usize) -> Vec<T> {
+    /// A buffer of `len` elements for a caller that overwrites every one: a kept one whose
+    /// capacity is at least `len` and at most twice it (the smallest such), holding its old
+    /// values (zeros past its old length), else a new zeroed allocation.
+    pub fn take<T: Pooled>(&self, len: usize) -> Vec<T> {
         let reused = {
             let mut k = self.kept();
             let list = T::list(&mut k);
@@ -95,7 +98,7 @@ impl Pool {
         };
         match reused {
             Some(mut v) => {
-                v.clear();
+                v.truncate(len);
                 v.resize(len, T::default());
                 v
             }
@@ -103,7 +106,7 @@ impl Pool {
         }
     }
 
-    /// Keeps `v`'s allocation for a later [`Pool::zeroed`], unless that would pass
+    /// Keeps `v`'s allocation for a later [`Pool::take`], unless that would pass
     /// [`KEEP_BUFFERS`] or [`KEEP_BYTES`] (then it is freed).
     pub fn recycle<T: Pooled>(&self, v: Vec<T>) {
         let b = bytes(&v);
@@ -134,9 +137,9 @@ impl Pool {
 
 static GLOBAL: Pool = Pool::new();
 
-/// [`Pool::zeroed`] from the process-wide pool (the tracer's outputs).
-pub fn zeroed<T: Pooled>(len: usize) -> Vec<T> {
-    GLOBAL.zeroed(len)
+/// [`Pool::take`] from the process-wide pool (the tracer's outputs).
+pub fn take<T: Pooled>(len: usize) -> Vec<T> {
+    GLOBAL.take(len)
 }
 
 /// [`Pool::recycle`] into the process-wide pool.
@@ -154,26 +157,34 @@ mod tests {
     use super::*;
 
     #[test]
-    fn recycled_buffers_come_back_zeroed_and_in_place() {
+    fn recycled_buffers_come_back_as_they_were_and_in_place() {
         let pool = Pool::new();
-        let mut a = pool.zeroed::<f32>(1000);
+        let mut a = pool.take::<f32>(1000);
         assert!(a.iter().all(|&x| x == 0.0));
         a.fill(7.5);
         let ptr = a.as_ptr();
+        a.truncate(700);
         pool.recycle(a);
-        // The same allocation, zero-filled, for any length from half its capacity up to it.
-        let b = pool.zeroed::<f32>(600);
+        // The same allocation, for any length from half its capacity up to it: its old values,
+        // then zeros past its old length.
+        let mut b = pool.take::<f32>(900);
         assert_eq!(b.as_ptr(), ptr);
-        assert_eq!(b.len(), 600);
-        assert!(b.iter().all(|&x| x == 0.0));
+        assert_eq!(b.len(), 900);
+        assert!(b[..700].iter().all(|&x| x == 7.5) && b[700..].iter().all(|&x| x == 0.0));
+        b.fill(2.0);
         pool.recycle(b);
-        // More than twice the length, or too short: a new allocation.
-        let c = pool.zeroed::<f32>(400);
+        let b = pool.take::<f32>(500);
+        assert_eq!((b.as_ptr(), b.len()), (ptr, 500));
+        assert!(b.iter().all(|&x| x == 2.0));
+        pool.recycle(b);
+        // More than twice the length, or too short: a new allocation, zeroed.
+        let c = pool.take::<f32>(400);
         assert_ne!(c.as_ptr(), ptr);
-        let d = pool.zeroed::<f32>(1001);
+        assert!(c.iter().all(|&x| x == 0.0));
+        let d = pool.take::<f32>(1001);
         assert_ne!(d.as_ptr(), ptr);
         // Another element type does not take it.
-        let e = pool.zeroed::<i32>(1000);
+        let e = pool.take::<i32>(1000);
         assert!(e.iter().all(|&x| x == 0));
         assert_eq!(pool.release(), 1000 * 4);
         assert_eq!(pool.release(), 0);

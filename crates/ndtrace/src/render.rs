@@ -136,13 +136,13 @@ where
 {
     let cam = &scene.camera;
     let cells = cam.cell_count();
-    // Zeroed buffers, kept ones when the last retina's were handed back ([`crate::pool`]); the
-    // loop writes every cell's depth and ids, misses included.
-    let mut rgba = pool::zeroed::<f32>(cells * 4);
-    let mut depth = pool::zeroed::<f32>(cells);
-    let mut normal = pool::zeroed::<f32>(cells * N);
-    let mut object_id = pool::zeroed::<i32>(cells);
-    let mut primitive_id = pool::zeroed::<i64>(cells);
+    // Kept buffers when the last retina's were handed back ([`crate::pool`]), not cleared: the
+    // loop writes every element of every cell, misses included.
+    let mut rgba = pool::take::<f32>(cells * 4);
+    let mut depth = pool::take::<f32>(cells);
+    let mut normal = pool::take::<f32>(cells * N);
+    let mut object_id = pool::take::<i32>(cells);
+    let mut primitive_id = pool::take::<i64>(cells);
     let samples = scene.render.samples as usize;
     // Only the depth mode uses it (it reads every vertex).
     let depth_range = match scene.render.mode {
@@ -243,10 +243,10 @@ where
                             px[k] = (color[k] * inv) as f32;
                         }
                         px[3] = (covered as f64 * inv) as f32;
+                        let nc: &mut [f32; N] =
+                            (&mut normal[c * N..(c + 1) * N]).try_into().unwrap();
                         if let Some(h) = nearest {
                             depth[c] = h.depth as f32;
-                            let nc: &mut [f32; N] =
-                                (&mut normal[c * N..(c + 1) * N]).try_into().unwrap();
                             for k in 0..N {
                                 nc[k] = h.normal[k] as f32;
                             }
@@ -254,6 +254,7 @@ where
                             primitive_id[c] = h.primitive;
                         } else {
                             depth[c] = f32::INFINITY;
+                            *nc = [0.0; N];
                             object_id[c] = -1;
                             primitive_id[c] = -1;
                         }
