@@ -446,7 +446,19 @@ impl<const N: usize> Work<N> {
             let c = match scene.render.mode {
                 RenderMode::Shaded => {
                     let m = &scene.objects[obj].material;
+                    let mut c: [f64; 3] =
+                        std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k]);
+                    // Terms are summed in light order: directly until one waits for its shadow
+                    // ray, then after the shadow pass.
+                    let mut waiting = false;
                     light_terms(scene, ray, dir_len, hit, obj, &n, |l, color, shadow| {
+                        if shadow.is_none() && !waiting {
+                            for k in 0..3 {
+                                c[k] += color[k];
+                            }
+                            return;
+                        }
+                        waiting = true;
                         if let Some(shadow) = shadow {
                             requests.push((l, self.terms.len(), shadow));
                         }
@@ -454,7 +466,7 @@ impl<const N: usize> Work<N> {
                         self.shadow.push(None);
                         self.terms.push((r, color));
                     });
-                    std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k])
+                    c
                 }
                 RenderMode::Depth => {
                     let g = 1.0
