@@ -596,6 +596,10 @@ impl<const N: usize> BlockHits<N> {
 }
 
 impl<const N: usize> Block<N> {
+    /// Bytes of `x0` and `m[0]` (n̂), which lead the block: all that a test reads before its
+    /// early exit.
+    const HEAD: usize = 2 * N * W * size_of::<f64>();
+
     /// Intersects the ray with every lane: which lanes are hit with t in (tmin, tmax), and
     /// their data. Per lane, exactly the arithmetic of [`PreparedSimplex::intersect`] (the same
     /// operations in the same order, hence the same bits). Returns early, before the inside
@@ -1776,6 +1780,15 @@ impl<const N: usize> Bvh<N> {
         if mask == 0 {
             return (EMPTY, 0);
         }
+        if NEAREST_FIRST {
+            // The leaves the next packets will likely meet (see `prefetch_block`).
+            for l in 0..NW {
+                let c = nd.child[l];
+                if c & LEAF != 0 && c != EMPTY {
+                    prefetch_block(&self.blocks[(c & !LEAF) as usize], Block::<N>::HEAD);
+                }
+            }
+        }
         // Byte l of `by_child`: the rays that meet child l.
         let by_child = transpose8(met);
         let rays_of = |l: usize| ((by_child >> (8 * l)) & 0xff) as u32;
@@ -1795,8 +1808,9 @@ impl<const N: usize> Bvh<N> {
                 let l = rest.trailing_zeros() as usize;
                 rest &= rest - 1;
                 if NEAREST_FIRST {
-                    // Tested soon (unless a hit culls them): start fetching them now.
-                    prefetch_block(&self.blocks[(nd.child[l] & !LEAF) as usize]);
+                    // Tested soon (unless a hit culls them): fetch them whole now.
+                    let block = &self.blocks[(nd.child[l] & !LEAF) as usize];
+                    prefetch_block(block, size_of::<Block<N>>());
                 }
                 stack[*sp].write(Entry {
                     node: nd.child[l],
@@ -1907,7 +1921,7 @@ impl<const N: usize> Bvh<N> {
             }
             if cur != EMPTY {
                 let block = &self.blocks[(cur & !LEAF) as usize];
-                prefetch_block(block);
+                prefetch_block(block, size_of::<Block<N>>());
                 let mut left = cur_rays;
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
@@ -1997,7 +2011,7 @@ impl<const N: usize> Bvh<N> {
             }
             if cur != EMPTY {
                 let block = &self.blocks[(cur & !LEAF) as usize];
-                prefetch_block(block);
+                prefetch_block(block, size_of::<Block<N>>());
                 let mut left = cur_rays & alive;
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
@@ -2194,23 +2208,30 @@ unsafe fn slab_ray<const N: usize>(
     }
 }
 
-/// Prefetches every cache line of a block (7 for N = 3, 408 bytes at any alignment). Its first
-/// lines (`x0`, `n̂`) are read at once, its last ones (the rows `r_k`, the ids) only once the t
-/// test passes, which otherwise makes a second cache miss in series with the first; and the
-/// blocks pushed for later arrive while the nearer ones are tested. On a 1.3 M-triangle
-/// icosphere at 512², a fifth of whose time went to waiting for blocks, this is about 3%
-/// faster (same results).
+/// Prefetches the first `bytes` bytes of a block: [`Block::HEAD`] (what a test reads before its
+/// early exit) or all of it (7 cache lines for N = 3, 408 bytes at any alignment).
+///
+/// Waiting for blocks took about a fifth of the time on a 1.3 M-triangle icosphere at 512²:
+/// its 66 MB of blocks do not stay in the core's caches from one trace to the next, so the
+/// first test of each block waited for memory, and once more for its last lines (the rows
+/// `r_k`, the ids), read only after the t test passed. Three prefetches hide part of that
+/// (same results; each about 2-4% faster there, no change measured on the 4D scenes):
+/// - a block about to be tested is fetched whole, so that its lines arrive together;
+/// - leaves pushed for later are fetched whole while the nearer ones are tested;
+/// - the heads of all the leaves of a node a packet enters are fetched, met or not: the next
+///   packets of the tile, a few pixels away, mostly meet the same node's other leaves.
 #[inline(always)]
-fn prefetch_block<const N: usize>(block: &Block<N>) {
+fn prefetch_block<const N: usize>(block: &Block<N>, bytes: usize) {
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (block, bytes);
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::*;
         let p = block as *const Block<N> as *const i8;
-        let n = std::mem::size_of::<Block<N>>();
         // Every 64 bytes from the start, then the last byte (a fixed count: unrolled).
-        for k in 0..=(n - 1) / 64 + 1 {
+        for k in 0..=(bytes - 1) / 64 + 1 {
             // SAFETY: a prefetch never faults; the address lies within the block.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add((64 * k).min(n - 1))) };
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add((64 * k).min(bytes - 1))) };
         }
     }
 }
