@@ -1780,13 +1780,16 @@ impl<const N: usize> Bvh<N> {
         if mask == 0 {
             return (EMPTY, 0);
         }
+        // The slots holding leaves (or nothing), and those holding nothing.
+        let (leafy, empty) = leaf_slots::<AVX>(&nd.child);
         if NEAREST_FIRST {
             // The leaves the next packets will likely meet (see `prefetch_block`).
-            for l in 0..NW {
-                let c = nd.child[l];
-                if c & LEAF != 0 && c != EMPTY {
-                    prefetch_block(&self.blocks[(c & !LEAF) as usize], Block::<N>::HEAD);
-                }
+            let mut leaves = leafy & !empty;
+            while leaves != 0 {
+                let l = leaves.trailing_zeros() as usize;
+                leaves &= leaves - 1;
+                let block = &self.blocks[(nd.child[l] & !LEAF) as usize];
+                prefetch_block(block, Block::<N>::HEAD);
             }
         }
         // Byte l of `by_child`: the rays that meet child l.
@@ -1795,11 +1798,6 @@ impl<const N: usize> Bvh<N> {
         if mask & (mask - 1) == 0 {
             let l = mask.trailing_zeros() as usize;
             return (nd.child[l], rays_of(l));
-        }
-        // The slots holding leaves (or nothing): those whose reference has the `LEAF` bit.
-        let mut leafy = 0u32;
-        for l in 0..NW {
-            leafy |= u32::from(nd.child[l] & LEAF != 0) << l;
         }
         if !NEAREST_FIRST || mask & !leafy == 0 {
             // Any order finds the same answer (shadow rays, leaves): children in slot order.
@@ -2234,6 +2232,30 @@ fn prefetch_block<const N: usize>(block: &Block<N>, bytes: usize) {
             unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add((64 * k).min(bytes - 1))) };
         }
     }
+}
+
+/// The bit sets of the slots of `child` holding a leaf or nothing (those whose reference has
+/// the `LEAF` bit) and of those holding nothing.
+#[inline(always)]
+fn leaf_slots<const AVX: bool>(child: &[u32; NW]) -> (u32, u32) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX && NW == 8 {
+        use std::arch::x86_64::*;
+        // SAFETY: `AVX` is only true in code running after an AVX2 check; `child` holds 8 u32
+        // (unaligned load).
+        unsafe {
+            let c = _mm256_loadu_si256(child.as_ptr().cast());
+            let leafy = _mm256_movemask_ps(_mm256_castsi256_ps(c)) as u32;
+            let none = _mm256_cmpeq_epi32(c, _mm256_set1_epi32(-1));
+            return (leafy, _mm256_movemask_ps(_mm256_castsi256_ps(none)) as u32);
+        }
+    }
+    let (mut leafy, mut empty) = (0, 0);
+    for (l, &c) in child.iter().enumerate() {
+        leafy |= u32::from(c & LEAF != 0) << l;
+        empty |= u32::from(c == EMPTY) << l;
+    }
+    (leafy, empty)
 }
 
 /// The bit set of the rays q with `t ≤ limit[q]`.
