@@ -1719,6 +1719,12 @@ impl<const N: usize> Bvh<N> {
         self.any_hits_impl::<true, P>(rays, tmin, tmax, accept, skip, out)
     }
 
+    /// The block of a child reference with the `LEAF` bit.
+    #[inline(always)]
+    fn block(&self, child: u32) -> &Block<N> {
+        &self.blocks[(child & !LEAF) as usize]
+    }
+
     /// Tests a block, with the AVX2 kernel when `AVX` (only instantiated inside functions
     /// compiled for AVX2).
     #[inline(always)]
@@ -1788,8 +1794,7 @@ impl<const N: usize> Bvh<N> {
             while leaves != 0 {
                 let l = leaves.trailing_zeros() as usize;
                 leaves &= leaves - 1;
-                let block = &self.blocks[(nd.child[l] & !LEAF) as usize];
-                prefetch_block(block, Block::<N>::HEAD);
+                prefetch_block(self.block(nd.child[l]), Block::<N>::HEAD);
             }
         }
         // Byte l of `by_child`: the rays that meet child l.
@@ -1807,8 +1812,7 @@ impl<const N: usize> Bvh<N> {
                 rest &= rest - 1;
                 if NEAREST_FIRST {
                     // Tested soon (unless a hit culls them): fetch them whole now.
-                    let block = &self.blocks[(nd.child[l] & !LEAF) as usize];
-                    prefetch_block(block, size_of::<Block<N>>());
+                    prefetch_block(self.block(nd.child[l]), size_of::<Block<N>>());
                 }
                 stack[*sp].write(Entry {
                     node: nd.child[l],
@@ -1918,7 +1922,7 @@ impl<const N: usize> Bvh<N> {
                 );
             }
             if cur != EMPTY {
-                let block = &self.blocks[(cur & !LEAF) as usize];
+                let block = self.block(cur);
                 prefetch_block(block, size_of::<Block<N>>());
                 let mut left = cur_rays;
                 while left != 0 {
@@ -2008,7 +2012,7 @@ impl<const N: usize> Bvh<N> {
                 );
             }
             if cur != EMPTY {
-                let block = &self.blocks[(cur & !LEAF) as usize];
+                let block = self.block(cur);
                 prefetch_block(block, size_of::<Block<N>>());
                 let mut left = cur_rays & alive;
                 while left != 0 {
@@ -2206,20 +2210,23 @@ unsafe fn slab_ray<const N: usize>(
     }
 }
 
-/// Prefetches the first `bytes` bytes of a block: [`Block::HEAD`] (what a test reads before its
-/// early exit) or all of it (7 cache lines for N = 3, 408 bytes at any alignment).
+/// Prefetches the first `bytes` (1 ≤ bytes ≤ its size) bytes of a block: [`Block::HEAD`] (what
+/// a test reads before its early exit) or all of it (408 bytes for N = 3: 7 or 8 cache lines,
+/// depending on where it starts).
 ///
 /// Waiting for blocks took about a fifth of the time on a 1.3 M-triangle icosphere at 512²:
 /// its 66 MB of blocks do not stay in the core's caches from one trace to the next, so the
 /// first test of each block waited for memory, and once more for its last lines (the rows
 /// `r_k`, the ids), read only after the t test passed. Three prefetches hide part of that
-/// (same results; each about 2-4% faster there, no change measured on the 4D scenes):
+/// (same results; each about 2-4% faster there, within the noise on the 4D scenes):
 /// - a block about to be tested is fetched whole, so that its lines arrive together;
-/// - leaves pushed for later are fetched whole while the nearer ones are tested;
+/// - when a packet meets only leaves of a node, those pushed for later are fetched whole while
+///   the first is tested;
 /// - the heads of all the leaves of a node a packet enters are fetched, met or not: the next
 ///   packets of the tile, a few pixels away, mostly meet the same node's other leaves.
 #[inline(always)]
 fn prefetch_block<const N: usize>(block: &Block<N>, bytes: usize) {
+    debug_assert!((1..=size_of::<Block<N>>()).contains(&bytes));
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (block, bytes);
     #[cfg(target_arch = "x86_64")]
@@ -3117,6 +3124,27 @@ mod tests {
         }
         // The cases are not trivial: some inner nodes were opened into their parents.
         assert!(opened > 0, "N={N}: no inner node was ever opened");
+    }
+
+    #[test]
+    fn leaf_slots_agree_with_the_portable_version() {
+        let mut r = rng(17);
+        for _ in 0..200 {
+            let child: [u32; NW] = std::array::from_fn(|_| match r.random_range(0..3) {
+                0 => EMPTY,
+                1 => LEAF | r.random_range(0..1000u32),
+                _ => r.random_range(0..1000u32),
+            });
+            let (leafy, empty) = leaf_slots::<false>(&child);
+            for (l, &c) in child.iter().enumerate() {
+                assert_eq!(leafy >> l & 1 == 1, c == EMPTY || c & LEAF != 0);
+                assert_eq!(empty >> l & 1 == 1, c == EMPTY);
+            }
+            #[cfg(target_arch = "x86_64")]
+            if std::is_x86_feature_detected!("avx2") {
+                assert_eq!(leaf_slots::<true>(&child), (leafy, empty));
+            }
+        }
     }
 
     #[test]
