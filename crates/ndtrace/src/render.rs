@@ -738,13 +738,29 @@ mod tests {
         );
     }
 
+    /// Two point lights (one with falloff) and a directional one, for the 3D shading tests.
+    const LIGHTS: &str = r#"
+[[lights]]
+type = "point"
+position = [2.0, 3.0, 2.5]
+color = [0.8, 0.7, 0.6]
+[[lights]]
+type = "directional"
+direction = [-1.0, 0.5, 0.2]
+color = [0.3, 0.4, 0.5]
+[[lights]]
+type = "point"
+position = [-3.0, -0.5, 1.0]
+color = [0.2, 0.2, 0.9]
+falloff = 1.0"#;
+
     #[test]
     fn terms_added_at_once_or_after_the_shadow_pass_sum_in_light_order() {
         // One coarse smooth convex sphere: a term needs a shadow ray only when its light lies
-        // on the inner side of the flat facet hit, which the smooth normal still faces (the
-        // grazing light does so in many cells); that ray leaves through the inside and is
-        // blocked. So a ray's terms are added at once, or some wait for the shadow pass (at
-        // least one cell); without shadows all are added at once.
+        // on the inner side of the flat facet hit, which the smooth normal still faces (near
+        // each light's terminator); that ray leaves through the inside and is blocked. So a
+        // ray's terms are added at once, or some wait for the shadow pass (in at least one
+        // cell); without shadows all are added at once.
         for (shadows, shadowed) in [(true, 1), (false, 0)] {
             let text = format!(
                 r#"
@@ -756,18 +772,7 @@ look_at = [0.0, 0.0, 0.0]
 up = [[0.0, 1.0, 0.0]]
 fov = 40.0
 resolution = [40, 30]
-[[lights]]
-type = "point"
-position = [2.0, 3.0, 2.5]
-color = [0.8, 0.7, 0.6]
-[[lights]]
-type = "directional"
-direction = [1.0, 0.0, 0.05]
-color = [0.3, 0.4, 0.5]
-[[lights]]
-type = "point"
-position = [-3.0, -0.5, 1.0]
-color = [0.2, 0.2, 0.9]
+{LIGHTS}
 [[objects]]
 shape = "sphere"
 subdivisions = 1
@@ -804,19 +809,7 @@ look_at = [0.0, 0.0, 0.0]
 up = [[0.0, 1.0, 0.0]]
 fov = 40.0
 resolution = {resolution}
-[[lights]]
-type = "point"
-position = [2.0, 3.0, 2.5]
-color = [0.8, 0.7, 0.6]
-[[lights]]
-type = "directional"
-direction = [-1.0, 0.5, 0.2]
-color = [0.3, 0.4, 0.5]
-[[lights]]
-type = "point"
-position = [-3.0, -0.5, 1.0]
-color = [0.2, 0.2, 0.9]
-falloff = 1.0
+{LIGHTS}
 [[objects]]
 shape = "sphere"
 subdivisions = 2
