@@ -101,11 +101,18 @@ impl<const N: usize> Camera<N> {
     /// The ray through retina point `u` (u_1 … u_{N−1}).
     #[inline]
     pub fn ray(&self, u: &[f64]) -> Ray<N> {
-        let view = self.axis(N - 1);
         let mut offset = [0.0; N];
         for k in 0..N - 1 {
             offset = add_scaled(&offset, u[k], &self.axis(k));
         }
+        self.ray_at(&offset)
+    }
+
+    /// The ray through the retina point whose offset from the retina's centre is `offset` =
+    /// `Σ u_k·col_k`.
+    #[inline]
+    pub fn ray_at(&self, offset: &Vector<N>) -> Ray<N> {
+        let view = self.axis(N - 1);
         match self.projection {
             Projection::Perspective => Ray {
                 origin: self.position,
@@ -136,6 +143,55 @@ impl<const N: usize> Camera<N> {
             Projection::Perspective => sub(&self.position, x),
             Projection::Orthographic => scale(&self.axis(N - 1), -1.0),
         }
+    }
+}
+
+/// The rays through the centres of a camera's cells, from tables of their offset terms: the
+/// same rays, bit for bit, as [`Camera::cell_point`] with f = ½ then [`Camera::ray`] give,
+/// without their per-ray index conversions and products.
+pub struct CentreRays<'a, const N: usize> {
+    cam: &'a Camera<N>,
+    /// `terms[start[k] + i]` = u_k·col_k for index i along axis k, with `0 + ` in front for
+    /// k = 0 (the first step of [`Camera::ray`]'s sum).
+    terms: Vec<Vector<N>>,
+    start: [usize; N],
+}
+
+impl<'a, const N: usize> CentreRays<'a, N> {
+    /// The tables of `cam` (one vector per cell along each axis).
+    pub fn new(cam: &'a Camera<N>) -> Self {
+        let centre = [0.5; N];
+        let mut idx = [0; N];
+        let mut u = [0.0; N];
+        let mut terms = Vec::new();
+        let mut start = [0; N];
+        for k in 0..N - 1 {
+            start[k] = terms.len();
+            for i in 0..cam.resolution[k] {
+                idx[k] = i;
+                cam.cell_point(&idx[..N - 1], &centre[..N - 1], &mut u[..N - 1]);
+                terms.push(if k == 0 {
+                    add_scaled(&[0.0; N], u[k], &cam.axis(k))
+                } else {
+                    scale(&cam.axis(k), u[k])
+                });
+            }
+        }
+        CentreRays { cam, terms, start }
+    }
+
+    /// The ray through the centre of the cell with multi-index `idx` (see
+    /// [`Camera::cell_index`]).
+    #[inline(always)]
+    pub fn ray(&self, idx: &[usize]) -> Ray<N> {
+        let mut offset = self.terms[idx[0]];
+        for k in 1..N - 1 {
+            let t = &self.terms[self.start[k] + idx[k]];
+            for j in 0..N {
+                offset[j] += t[j];
+            }
+        }
+        self.cam.ray_at(&offset)
     }
 }
 
@@ -220,6 +276,45 @@ mod tests {
     #[test]
     fn look_at_frames_in_every_dimension() {
         for_each_dim!(look_at_frame);
+    }
+
+    /// [`CentreRays`] gives, bit for bit, the ray of [`Camera::cell_point`] at the centre then
+    /// [`Camera::ray`], for every cell of small retinas of unequal sides, both projections and
+    /// random frames.
+    fn centre_rays_match<const N: usize>() {
+        let mut r = rng(950 + N as u64);
+        for projection in [Projection::Perspective, Projection::Orthographic] {
+            let cam = Camera::<N> {
+                position: random_vector(&mut r, 3.0),
+                orientation: random_rotation(&mut r),
+                projection,
+                cell: 0.37,
+                resolution: (0..N - 1).map(|k| [5, 4, 1, 3][k % 4]).collect(),
+            };
+            let rays = CentreRays::new(&cam);
+            let (mut idx, mut u) = ([0; N], [0.0; N]);
+            for cell in 0..cam.cell_count() {
+                cam.cell_index(cell, &mut idx);
+                cam.cell_point(&idx, &[0.5; N][..N - 1], &mut u);
+                let (a, b) = (rays.ray(&idx), cam.ray(&u[..N - 1]));
+                let bits = |v: &Vector<N>| v.map(f64::to_bits);
+                assert_eq!(
+                    bits(&a.origin),
+                    bits(&b.origin),
+                    "N={N} {projection:?} cell {cell}"
+                );
+                assert_eq!(
+                    bits(&a.dir),
+                    bits(&b.dir),
+                    "N={N} {projection:?} cell {cell}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn centre_rays_are_the_rays_through_cell_centres() {
+        for_each_dim!(centre_rays_match);
     }
 
     #[test]

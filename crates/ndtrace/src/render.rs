@@ -9,6 +9,7 @@
 //! cell index, so the retina is bit-identical whatever the number of threads.
 
 use crate::accel::{Hit, Ray, BOX_PAD, PACKET};
+use crate::camera::CentreRays;
 use crate::linalg::{add_scaled, dot, norm, scale, sub, Vector};
 use crate::pool;
 use crate::scene::desc::RenderMode;
@@ -106,6 +107,16 @@ struct NearestHit<const N: usize> {
     primitive: i64,
 }
 
+impl<const N: usize> NearestHit<N> {
+    /// The record of a miss, as the retina holds it.
+    const MISS: Self = NearestHit {
+        depth: f64::INFINITY,
+        normal: [0.0; N],
+        object: -1,
+        primitive: -1,
+    };
+}
+
 /// Traces every retina cell of `scene` (on the current rayon pool).
 pub fn trace<const N: usize>(scene: &Scene<N>, progress: &Progress) -> NdResult<Retina> {
     // Back-face culling (course notes): discard a simplex when det[x_1−x_0 … | C − x_0] < 0,
@@ -157,6 +168,9 @@ where
     let (chunk_cells, tiled) = chunking(row, N - 1);
     // The order of a whole chunk, when there is one (the last chunk may be shorter).
     let tiles = (tiled && chunk_cells <= cells).then(|| tile_order(row, chunk_cells / row));
+    // One sample per cell: its centre.
+    let centre = CentreRays::new(cam);
+    let shading = ObjectShading::all(scene);
     rgba.par_chunks_mut(chunk_cells * 4)
         .zip(depth.par_chunks_mut(chunk_cells))
         .zip(normal.par_chunks_mut(chunk_cells * N))
@@ -169,9 +183,7 @@ where
                     return;
                 }
                 let mut work = Work::default();
-                // One sample per cell: its centre, the same for every cell.
                 let mut offsets = Vec::with_capacity(samples * (N - 1));
-                sample_offsets(1, N - 1, &mut SplitMix::new(0, 0), &mut offsets);
                 let mut u = [0.0; N];
                 let mut idx = [0; N];
                 let inv = 1.0 / samples as f64;
@@ -208,56 +220,36 @@ where
                             idx = rows[r as usize];
                             idx[0] = col as usize;
                         }
-                        if samples > 1 {
+                        if samples == 1 {
+                            work.rays.push(centre.ray(&idx));
+                        } else {
                             let cell = chunk * chunk_cells + c;
                             let mut rng = SplitMix::new(scene.render.seed, cell as u64);
                             sample_offsets(samples, N - 1, &mut rng, &mut offsets);
-                        }
-                        for j in 0..samples {
-                            let f = &offsets[j * (N - 1)..(j + 1) * (N - 1)];
-                            cam.cell_point(&idx, f, &mut u);
-                            work.rays.push(cam.ray(&u[..N - 1]));
+                            for f in offsets.chunks(N - 1) {
+                                cam.cell_point(&idx, f, &mut u);
+                                work.rays.push(cam.ray(&u[..N - 1]));
+                            }
                         }
                         if tiled.is_none() {
                             cam.next_cell(&mut idx);
                         }
                     }
-                    let colors = work.trace(scene, &accept, depth_range);
-                    for (s, cell_rays) in slots.zip(colors.chunks(samples)) {
+                    work.trace(scene, &accept, &shading, depth_range);
+                    for (j, s) in slots.enumerate() {
                         let c = cell_of(s);
-                        let mut color = [0.0f64; 3];
-                        let mut covered = 0usize;
-                        let mut nearest: Option<NearestHit<N>> = None;
-                        for r in cell_rays {
-                            let Some((col, h)) = r else { continue };
-                            covered += 1;
-                            for k in 0..3 {
-                                color[k] += col[k];
-                            }
-                            if nearest.as_ref().is_none_or(|n| h.depth < n.depth) {
-                                nearest = Some(*h);
-                            }
-                        }
-                        let px: &mut [f32; 4] = (&mut rgba[c * 4..c * 4 + 4]).try_into().unwrap();
-                        for k in 0..3 {
-                            px[k] = (color[k] * inv) as f32;
-                        }
-                        px[3] = (covered as f64 * inv) as f32;
+                        let rays = j * samples..(j + 1) * samples;
+                        let (px, nearest) =
+                            cell_sum(&work.color[rays.clone()], &work.nearest[rays], inv);
+                        rgba[c * 4..c * 4 + 4].copy_from_slice(&px);
                         let nc: &mut [f32; N] =
                             (&mut normal[c * N..(c + 1) * N]).try_into().unwrap();
-                        if let Some(h) = nearest {
-                            depth[c] = h.depth as f32;
-                            for k in 0..N {
-                                nc[k] = h.normal[k] as f32;
-                            }
-                            object_id[c] = h.object;
-                            primitive_id[c] = h.primitive;
-                        } else {
-                            depth[c] = f32::INFINITY;
-                            *nc = [0.0; N];
-                            object_id[c] = -1;
-                            primitive_id[c] = -1;
+                        depth[c] = nearest.depth as f32;
+                        for k in 0..N {
+                            nc[k] = nearest.normal[k] as f32;
                         }
+                        object_id[c] = nearest.object;
+                        primitive_id[c] = nearest.primitive;
                     }
                 }
                 progress.done.fetch_add(depth.len(), Ordering::Relaxed);
@@ -275,6 +267,42 @@ where
         object_id,
         primitive_id,
     })
+}
+
+/// A cell's value from its rays (`inv` = 1 / their number): premultiplied RGBA, the mean of
+/// their colours (misses' are 0) and the fraction that hit, and the nearest hit
+/// ([`NearestHit::MISS`] if none).
+#[inline(always)]
+fn cell_sum<'a, const N: usize>(
+    colors: &[[f64; 3]],
+    hits: &'a [NearestHit<N>],
+    inv: f64,
+) -> ([f32; 4], &'a NearestHit<N>) {
+    if let ([col], [h]) = (colors, hits) {
+        // The loop below for one ray (the same bits: x·1 = x), without its overhead.
+        let a = if h.object >= 0 { 1.0 } else { 0.0 };
+        return (
+            [0.0 + col[0], 0.0 + col[1], 0.0 + col[2], a].map(|x| x as f32),
+            h,
+        );
+    }
+    let mut color = [0.0f64; 3];
+    let mut covered = 0usize;
+    let mut nearest = &NearestHit::MISS;
+    for (col, h) in colors.iter().zip(hits) {
+        if h.object < 0 {
+            continue;
+        }
+        covered += 1;
+        for k in 0..3 {
+            color[k] += col[k];
+        }
+        if nearest.object < 0 || h.depth < nearest.depth {
+            nearest = h;
+        }
+    }
+    let px = [color[0], color[1], color[2], covered as f64].map(|x| (x * inv) as f32);
+    (px, nearest)
 }
 
 /// Cells per chunk for rows of `row` cells on a retina of `axes` axes, and whether chunks are
@@ -389,9 +417,11 @@ fn shading_normal<const N: usize>(
 struct Work<const N: usize> {
     rays: Vec<Ray<N>>,
     hits: Vec<Option<Hit<N>>>,
-    /// Per camera ray: colour so far (ambient and the light terms added at once) and its
-    /// nearest-hit record, for rays that hit.
-    shaded: Vec<Option<([f64; 3], NearestHit<N>)>>,
+    /// Per camera ray: its colour (ambient and the light terms added at once, then those
+    /// added after the shadow pass; 0 on a miss) and its nearest-hit record
+    /// ([`NearestHit::MISS`] on a miss).
+    color: Vec<[f64; 3]>,
+    nearest: Vec<NearestHit<N>>,
     /// Light contributions (camera ray, colour) added after the shadow pass (a ray's terms from
     /// its first that waits for a shadow ray on), in ray order then light order; `shadow[i]` is
     /// the index of the term's shadow ray, if it has one.
@@ -405,6 +435,40 @@ struct Work<const N: usize> {
     requests: Vec<(usize, usize, Shadow<N>)>,
 }
 
+/// What shading needs of an object and its material, computed once per trace.
+struct ObjectShading {
+    /// The ambient term: material ambient × scene ambient × material colour, per channel.
+    ambient: [f64; 3],
+    /// The diffuse coefficient: material diffuse × material colour, per channel.
+    diffuse: [f64; 3],
+    /// Whether the material has a specular term.
+    specular: bool,
+    /// The object's global simplex ids.
+    ids: Range<u32>,
+    /// Whether they are all the scene's.
+    whole_scene: bool,
+}
+
+impl ObjectShading {
+    /// The constants of every object of `scene`, in object order.
+    fn all<const N: usize>(scene: &Scene<N>) -> Vec<Self> {
+        let all = 0..scene.flat_normals.len() as u32;
+        (0..scene.objects.len())
+            .map(|obj| {
+                let m = &scene.objects[obj].material;
+                let ids = scene.ids(obj);
+                ObjectShading {
+                    ambient: std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k]),
+                    diffuse: std::array::from_fn(|k| m.diffuse[k] * m.color[k]),
+                    specular: m.specular.iter().any(|&s| s > 0.0),
+                    whole_scene: ids == all,
+                    ids,
+                }
+            })
+            .collect()
+    }
+}
+
 /// A shadow ray: the light counts unless a simplex whose id lies outside `skip` is hit with t in
 /// (0, tmax). `skip` holds the ids of the object hit when that object is convex and the ray
 /// leaves it on the outer side ([`crate::convex`]), else it is empty.
@@ -416,28 +480,30 @@ struct Shadow<const N: usize> {
 }
 
 impl<const N: usize> Work<N> {
-    /// Traces `self.rays` and shades their hits: per ray, its colour and nearest-hit record
-    /// (`None` on a miss).
+    /// Traces `self.rays` and shades their hits into `self.color` and `self.nearest`.
     fn trace(
         &mut self,
         scene: &Scene<N>,
         accept: &(impl Fn(u32) -> bool + Sync),
+        shading: &[ObjectShading],
         depth_range: (f64, f64),
-    ) -> &[Option<([f64; 3], NearestHit<N>)>] {
+    ) {
         let cam = &scene.camera;
         self.hits.clear();
         self.hits.resize(self.rays.len(), None);
         scene
             .bvh
             .closest_hits(&self.rays, 0.0, f64::INFINITY, accept, &mut self.hits);
-        self.shaded.clear();
+        self.color.clear();
+        self.nearest.clear();
         self.terms.clear();
         self.shadow.clear();
         let requests = &mut self.requests;
         requests.clear();
         for (r, (ray, hit)) in self.rays.iter().zip(&self.hits).enumerate() {
             let Some(hit) = hit else {
-                self.shaded.push(None);
+                self.color.push([0.0; 3]);
+                self.nearest.push(NearestHit::MISS);
                 continue;
             };
             let (obj, local) = scene.locate(hit.prim);
@@ -446,13 +512,12 @@ impl<const N: usize> Work<N> {
             let depth = cam.depth(hit.t, dir_len);
             let c = match scene.render.mode {
                 RenderMode::Shaded => {
-                    let m = &scene.objects[obj].material;
-                    let mut c: [f64; 3] =
-                        std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k]);
+                    let sh = &shading[obj];
+                    let mut c = sh.ambient;
                     // Terms are summed in light order: directly until one waits for its shadow
                     // ray, then after the shadow pass.
                     let mut waiting = false;
-                    light_terms(scene, ray, dir_len, hit, obj, &n, |l, color, shadow| {
+                    light_terms(scene, ray, dir_len, hit, obj, sh, &n, |l, color, shadow| {
                         if shadow.is_none() && !waiting {
                             for k in 0..3 {
                                 c[k] += color[k];
@@ -490,7 +555,8 @@ impl<const N: usize> Work<N> {
                 object: obj as i32,
                 primitive: local as i64,
             };
-            self.shaded.push(Some((c, nearest)));
+            self.color.push(c);
+            self.nearest.push(nearest);
         }
         if !requests.is_empty() {
             // Light order, so that each packet holds rays toward one light, then by the ids
@@ -526,13 +592,11 @@ impl<const N: usize> Work<N> {
             if self.shadow[i].is_some_and(|s| self.blocked[s]) {
                 continue;
             }
-            if let Some((c, _)) = &mut self.shaded[r] {
-                for k in 0..3 {
-                    c[k] += color[k];
-                }
+            let c = &mut self.color[r];
+            for k in 0..3 {
+                c[k] += color[k];
             }
         }
-        &self.shaded
     }
 }
 
@@ -551,25 +615,22 @@ const _: () = assert!(SHADOW_OFFSET >= 10.0 * BOX_PAD);
 /// the dot product of the unit normal with the unit vector toward it, clamped at 0 (lights
 /// behind the surface contribute nothing and need no shadow ray). `dir_len` is |ray.dir|.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn light_terms<const N: usize>(
     scene: &Scene<N>,
     ray: &Ray<N>,
     dir_len: f64,
     hit: &Hit<N>,
     obj: usize,
+    sh: &ObjectShading,
     n: &Vector<N>,
     mut emit: impl FnMut(usize, [f64; 3], Option<Shadow<N>>),
 ) {
     let o = &scene.objects[obj];
     let m = &o.material;
-    let all = 0..scene.flat_normals.len() as u32;
     let x = add_scaled(&ray.origin, hit.t, &ray.dir);
     // The unit vector toward the viewer, for the specular term only.
-    let v = m
-        .specular
-        .iter()
-        .any(|&s| s > 0.0)
-        .then(|| scale(&ray.dir, -1.0 / dir_len));
+    let v = sh.specular.then(|| scale(&ray.dir, -1.0 / dir_len));
     let flat = hit.normal;
     let eps = SHADOW_OFFSET * scene.extent;
     for (index, light) in scene.lights.iter().enumerate() {
@@ -600,18 +661,16 @@ fn light_terms<const N: usize>(
         let shadow = if scene.render.shadows {
             // Leave the surface on the light's side of the simplex's hyperplane.
             let along = dot(&flat, &l) >= 0.0;
-            let origin = add_scaled(&x, if along { eps } else { -eps }, &flat);
             // A convex object lies on one side of the hyperplane: a ray leaving on the other
-            // side never meets it again.
-            let skip = if o.convex == Some(along) {
-                scene.ids(obj)
-            } else {
-                0..0
-            };
-            (skip != all).then_some(Shadow {
-                ray: Ray { origin, dir: l },
+            // side never meets it again (nor anything, when the object is all the scene).
+            let skips = o.convex == Some(along);
+            (!(skips && sh.whole_scene)).then(|| Shadow {
+                ray: Ray {
+                    origin: add_scaled(&x, if along { eps } else { -eps }, &flat),
+                    dir: l,
+                },
                 tmax: dist - eps,
-                skip,
+                skip: if skips { sh.ids.clone() } else { 0..0 },
             })
         } else {
             None
@@ -626,7 +685,7 @@ fn light_terms<const N: usize>(
             0.0
         };
         let c = std::array::from_fn(|k| {
-            atten * color[k] * (m.diffuse[k] * m.color[k] * ndl + m.specular[k] * spec)
+            atten * color[k] * (sh.diffuse[k] * ndl + m.specular[k] * spec)
         });
         emit(index, c, shadow);
     }
@@ -638,16 +697,18 @@ mod tests {
     use crate::scene::load_toml_str;
 
     /// One cell, one ray at a time, with the single-ray queries: the colour sum and nearest hit
-    /// the packet path must reproduce bit for bit.
+    /// (the first sample of least depth) the packet path must reproduce bit for bit, the
+    /// samples that hit, and the shadow rays blocked.
     fn one_ray_at_a_time<const N: usize>(
         scene: &Scene<N>,
         cell: usize,
-    ) -> ([f64; 3], usize, usize) {
+    ) -> ([f64; 3], NearestHit<N>, usize, usize) {
         let samples = scene.render.samples as usize;
         let mut rng = SplitMix::new(scene.render.seed, cell as u64);
         let mut offsets = vec![];
         sample_offsets(samples, N - 1, &mut rng, &mut offsets);
         let (mut color, mut covered, mut blocked) = ([0.0; 3], 0, 0);
+        let mut nearest = NearestHit::MISS;
         let mut u = [0.0; N];
         for j in 0..samples {
             scene
@@ -664,21 +725,41 @@ mod tests {
             let mut c: [f64; 3] =
                 std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k]);
             let dir_len = norm(&ray.dir);
-            light_terms(scene, &ray, dir_len, &hit, obj, &n, |_, term, shadow| {
-                if shadow.is_some_and(|s| scene.bvh.any_hit(&s.ray, 0.0, s.tmax, |_| true, s.skip))
-                {
-                    blocked += 1;
-                    return;
-                }
-                for k in 0..3 {
-                    c[k] += term[k];
-                }
-            });
+            let depth = scene.camera.depth(hit.t, dir_len);
+            if covered == 1 || depth < nearest.depth {
+                nearest = NearestHit {
+                    depth,
+                    normal: n,
+                    object: obj as i32,
+                    primitive: local as i64,
+                };
+            }
+            let sh = &ObjectShading::all(scene)[obj];
+            light_terms(
+                scene,
+                &ray,
+                dir_len,
+                &hit,
+                obj,
+                sh,
+                &n,
+                |_, term, shadow| {
+                    if shadow
+                        .is_some_and(|s| scene.bvh.any_hit(&s.ray, 0.0, s.tmax, |_| true, s.skip))
+                    {
+                        blocked += 1;
+                        return;
+                    }
+                    for k in 0..3 {
+                        c[k] += term[k];
+                    }
+                },
+            );
             for k in 0..3 {
                 color[k] += c[k];
             }
         }
-        (color, covered, blocked)
+        (color, nearest, covered, blocked)
     }
 
     /// Every cell's RGBA has the bits of [`one_ray_at_a_time`]; returns the cells hit and the
@@ -696,7 +777,7 @@ mod tests {
         let retina = trace(scene, &Progress::default()).unwrap();
         let (mut lit, mut shadowed) = (0, 0);
         for cell in 0..scene.camera.cell_count() {
-            let (color, covered, blocked) = one_ray_at_a_time(scene, cell);
+            let (color, nearest, covered, blocked) = one_ray_at_a_time(scene, cell);
             let inv = 1.0 / samples as f64;
             for k in 0..3 {
                 assert_eq!(
@@ -706,8 +787,18 @@ mod tests {
                 );
             }
             assert_eq!(retina.rgba[cell * 4 + 3], (covered as f64 * inv) as f32);
-            // Every element written, misses' too.
+            // Every element written, misses' too, with the nearest hit's record.
             let normal = &retina.normal[cell * N..(cell + 1) * N];
+            assert_eq!(
+                retina.depth[cell].to_bits(),
+                (nearest.depth as f32).to_bits()
+            );
+            assert_eq!(normal, nearest.normal.map(|x| x as f32).as_slice());
+            assert_eq!(
+                (retina.object_id[cell], retina.primitive_id[cell]),
+                (nearest.object, nearest.primitive),
+                "cell {cell}"
+            );
             if covered > 0 {
                 assert!(retina.object_id[cell] >= 0 && retina.primitive_id[cell] >= 0);
                 assert!(retina.depth[cell].is_finite(), "cell {cell}");
