@@ -1883,9 +1883,9 @@ impl<const N: usize> Bvh<N> {
         accept: &impl Fn(u32) -> bool,
         out: &mut [Option<Hit<N>>],
     ) {
-        out.fill(None);
         let k = rays.len();
         if self.nodes.is_empty() || !(tmin < tmax) || k == 0 {
+            out.fill(None);
             return;
         }
         let mut slot = MaybeUninit::uninit();

@@ -489,7 +489,7 @@ impl<const N: usize> Work<N> {
         depth_range: (f64, f64),
     ) {
         let cam = &scene.camera;
-        self.hits.clear();
+        // Sized to the rays (no clearing: `closest_hits` writes every element).
         self.hits.resize(self.rays.len(), None);
         scene
             .bvh
