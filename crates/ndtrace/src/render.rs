@@ -186,7 +186,6 @@ where
                 let mut offsets = Vec::with_capacity(samples * (N - 1));
                 let mut u = [0.0; N];
                 let mut idx = [0; N];
-                let inv = 1.0 / samples as f64;
                 cam.cell_index(chunk * chunk_cells, &mut idx);
                 // Tiled order when the chunks are whole rows: the multi-index of the first cell
                 // of each row of the chunk.
@@ -238,9 +237,7 @@ where
                     work.trace(scene, &accept, &shading, depth_range);
                     for (j, s) in slots.enumerate() {
                         let c = cell_of(s);
-                        let rays = j * samples..(j + 1) * samples;
-                        let (px, nearest) =
-                            cell_sum(&work.color[rays.clone()], &work.nearest[rays], inv);
+                        let (px, nearest) = cell_sum(&work.color, &work.nearest, j, samples);
                         rgba[c * 4..c * 4 + 4].copy_from_slice(&px);
                         let nc: &mut [f32; N] =
                             (&mut normal[c * N..(c + 1) * N]).try_into().unwrap();
@@ -269,27 +266,31 @@ where
     })
 }
 
-/// A cell's value from its rays (`inv` = 1 / their number): premultiplied RGBA, the mean of
-/// their colours (misses' are 0) and the fraction that hit, and the nearest hit
-/// ([`NearestHit::MISS`] if none).
+/// The value of the `j`-th cell of a group from its `samples` rays (rays `j·samples …` of
+/// `colors` and `hits`): premultiplied RGBA, the mean of their colours (misses' are 0) and the
+/// fraction that hit, and the nearest hit ([`NearestHit::MISS`] if none).
 #[inline(always)]
 fn cell_sum<'a, const N: usize>(
     colors: &[[f64; 3]],
     hits: &'a [NearestHit<N>],
-    inv: f64,
+    j: usize,
+    samples: usize,
 ) -> ([f32; 4], &'a NearestHit<N>) {
-    if let ([col], [h]) = (colors, hits) {
+    if samples == 1 {
         // The loop below for one ray (the same bits: x·1 = x), without its overhead.
+        let (col, h) = (&colors[j], &hits[j]);
         let a = if h.object >= 0 { 1.0 } else { 0.0 };
         return (
             [0.0 + col[0], 0.0 + col[1], 0.0 + col[2], a].map(|x| x as f32),
             h,
         );
     }
+    let rays = j * samples..(j + 1) * samples;
+    let inv = 1.0 / samples as f64;
     let mut color = [0.0f64; 3];
     let mut covered = 0usize;
     let mut nearest = &NearestHit::MISS;
-    for (col, h) in colors.iter().zip(hits) {
+    for (col, h) in colors[rays.clone()].iter().zip(&hits[rays]) {
         if h.object < 0 {
             continue;
         }
