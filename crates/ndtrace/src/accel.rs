@@ -1953,7 +1953,12 @@ impl<const N: usize> Bvh<N> {
                                 lane: l as u32,
                             };
                             limit[q] = f32_up(pad_up(t));
-                            tmax_b[q] = t.next_up();
+                            // `t.next_up()`, by one step when t > 0 (then finite: t < tmax_b).
+                            tmax_b[q] = if t > 0.0 {
+                                f64::from_bits(t.to_bits() + 1)
+                            } else {
+                                t.next_up()
+                            };
                         }
                     }
                 }
