@@ -1580,8 +1580,9 @@ impl<const N: usize> Bvh<N> {
         out[0]
     }
 
-    /// [`Bvh::closest_hit`] for every ray of `rays` into `out` (same length), traced in packets
-    /// of [`PACKET`] rays that share node visits. Each result is exactly the one
+    /// [`Bvh::closest_hit`] for every ray of `rays` into `out` (same length; every element is
+    /// overwritten, misses with `None`), traced in packets of [`PACKET`] rays that share node
+    /// visits. Each result is exactly the one
     /// [`Bvh::closest_hit`] gives for that ray alone: the minimum of (t, id) over the accepted
     /// hits does not depend on which rays travel together.
     ///
@@ -1953,7 +1954,9 @@ impl<const N: usize> Bvh<N> {
                                 lane: l as u32,
                             };
                             limit[q] = f32_up(pad_up(t));
-                            // `t.next_up()`, by one step when t > 0 (then finite: t < tmax_b).
+                            // `t.next_up()`, by one step when t > 0 (then finite: the block
+                            // tests accept only t < tmax_b, strictly).
+                            debug_assert!(t < f64::INFINITY);
                             tmax_b[q] = if t > 0.0 {
                                 f64::from_bits(t.to_bits() + 1)
                             } else {
@@ -2341,6 +2344,12 @@ impl<const N: usize, const P: usize> Packet<N, P> {
                 p.o_near.map(f32::to_bits) == pre[0].o_near.map(f32::to_bits)
                     && p.o_far.map(f32::to_bits) == pre[0].o_far.map(f32::to_bits)
             }));
+            // Every field above: this pattern stops compiling if a field is added.
+            let Packet {
+                pre: _,
+                octant: _,
+                shared_origin: _,
+            } = slot.assume_init_ref();
             slot.assume_init_ref()
         }
     }
@@ -2725,10 +2734,17 @@ mod tests {
                     .iter()
                     .map(|ray| brute(&prims, ray, tmin, tmax, f))
                     .collect();
-                let mut got = vec![None; count];
+                // Stale results, which every element's write must replace.
+                let stale = Some(Hit {
+                    t: -1.0,
+                    prim: u32::MAX,
+                    bary: [f64::NAN; N],
+                    normal: [0.0; N],
+                });
+                let mut got = vec![stale; count];
                 bvh.closest_hits(&rays, tmin, tmax, f, &mut got);
                 assert_eq!(got, want, "N={N} case {case}");
-                let mut portable = vec![None; count];
+                let mut portable = vec![stale; count];
                 for (rs, out) in rays.chunks(PACKET).zip(portable.chunks_mut(PACKET)) {
                     bvh.closest_hits_impl::<false, PACKET>(rs, tmin, tmax, &f, out);
                 }
