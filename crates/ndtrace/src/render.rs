@@ -695,14 +695,16 @@ fn light_terms<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::linalg::det;
     use crate::scene::load_toml_str;
 
     /// One cell, one ray at a time, with the single-ray queries: the colour sum and nearest hit
     /// (the first sample of least depth) the packet path must reproduce bit for bit, the
-    /// samples that hit, and the shadow rays blocked.
+    /// samples that hit, and the shadow rays blocked. Camera rays see the simplices `accept`s.
     fn one_ray_at_a_time<const N: usize>(
         scene: &Scene<N>,
         cell: usize,
+        accept: &dyn Fn(u32) -> bool,
     ) -> ([f64; 3], NearestHit<N>, usize, usize) {
         let samples = scene.render.samples as usize;
         let mut rng = SplitMix::new(scene.render.seed, cell as u64);
@@ -716,7 +718,7 @@ mod tests {
                 .camera
                 .retina_point(cell, &offsets[j * (N - 1)..(j + 1) * (N - 1)], &mut u);
             let ray = scene.camera.ray(&u[..N - 1]);
-            let Some(hit) = scene.bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true) else {
+            let Some(hit) = scene.bvh.closest_hit(&ray, 0.0, f64::INFINITY, accept) else {
                 continue;
             };
             covered += 1;
@@ -736,6 +738,16 @@ mod tests {
                 };
             }
             let sh = &ObjectShading::all(scene)[obj];
+            // The per-object constants both sides use, checked against the material (the
+            // ambient term above is computed from it directly).
+            let diffuse: [f64; 3] = std::array::from_fn(|k| m.diffuse[k] * m.color[k]);
+            assert_eq!(sh.diffuse.map(f64::to_bits), diffuse.map(f64::to_bits));
+            assert_eq!(sh.specular, m.specular != [0.0; 3]);
+            assert_eq!(sh.ids, scene.ids(obj));
+            assert_eq!(
+                sh.whole_scene,
+                sh.ids.start == 0 && sh.ids.end == scene.flat_normals.len() as u32
+            );
             light_terms(
                 scene,
                 &ray,
@@ -766,6 +778,29 @@ mod tests {
     /// Every cell's RGBA has the bits of [`one_ray_at_a_time`]; returns the cells hit and the
     /// cells with a blocked shadow ray.
     fn shade_as_one_ray_at_a_time<const N: usize>(scene: &Scene<N>) -> (usize, usize) {
+        // Back-face culling (course notes): a simplex is culled when
+        // det[x_1 − x_0 … x_{N−1} − x_0 | C − x_0] < 0, here the determinant itself (the
+        // tracer takes the dot product of the flat normal with C − x_0).
+        let culled: Vec<bool> = (0..scene.flat_normals.len() as u32)
+            .map(|g| {
+                let (o, s) = scene.locate(g);
+                let mesh = &scene.objects[o].mesh;
+                let x: Vec<Vector<N>> = mesh.simplices[s]
+                    .iter()
+                    .map(|&i| mesh.vertices[i as usize])
+                    .collect();
+                let mut m = [[0.0; N]; N];
+                for (k, row) in m.iter_mut().enumerate() {
+                    *row = if k + 1 < N {
+                        sub(&x[k + 1], &x[0])
+                    } else {
+                        scene.camera.toward_eye(&x[0])
+                    };
+                }
+                scene.render.cull_backfaces && det(&m) < 0.0
+            })
+            .collect();
+        let accept = |g: u32| !culled[g as usize];
         let samples = scene.render.samples as usize;
         // Stale values in buffers of every output's size, which the trace takes from the pool
         // (unless a concurrent test does): it must overwrite every element.
@@ -778,7 +813,7 @@ mod tests {
         let retina = trace(scene, &Progress::default()).unwrap();
         let (mut lit, mut shadowed) = (0, 0);
         for cell in 0..scene.camera.cell_count() {
-            let (color, nearest, covered, blocked) = one_ray_at_a_time(scene, cell);
+            let (color, nearest, covered, blocked) = one_ray_at_a_time(scene, cell, &accept);
             let inv = 1.0 / samples as f64;
             for k in 0..3 {
                 assert_eq!(
@@ -946,6 +981,177 @@ shadows = true
 "#
             );
             shades_as_one_ray_at_a_time(&text, 61, 6);
+        }
+    }
+
+    #[test]
+    fn other_cameras_and_dimensions_shade_as_one_ray_at_a_time() {
+        // (scene, cells hit at least, cells with a blocked shadow ray at least).
+        let cases = [
+            // N = 2: a 1-D retina of one chunk, a polygon circle shadowing a square, 1 and 3
+            // samples.
+            (
+                r#"
+dim = 2
+[camera]
+position = [0.3, 3.0]
+look_at = [0.0, 0.0]
+fov = 70.0
+resolution = 53
+[[lights]]
+type = "point"
+position = [2.5, 2.0]
+[[lights]]
+type = "directional"
+direction = [-1.0, 0.3]
+color = [0.3, 0.2, 0.1]
+[[objects]]
+shape = "sphere"
+subdivisions = 3
+material = { color = [0.9, 0.5, 0.3], specular = 0.5, shininess = 8.0 }
+[[objects]]
+shape = "hypercube"
+transform = [{ scale = 0.3 }, { translate = [-1.2, -0.6] }]
+[render]
+shadows = true
+samples = SAMPLES
+"#,
+                15,
+                1,
+            ),
+            // Orthographic, one-sided lighting, back-face culling: a triangle facing the camera
+            // and one facing away (culled: the sphere behind it shows), 2 samples.
+            (
+                r#"
+dim = 3
+[camera]
+position = [0.2, 0.1, 5.0]
+look_at = [0.0, 0.0, 0.0]
+up = [[0.0, 1.0, 0.0]]
+projection = "orthographic"
+extent = 2.0
+resolution = [30, 21]
+[[lights]]
+type = "point"
+position = [1.0, 3.0, 4.0]
+falloff = 2.0
+[[objects]]
+shape = "sphere"
+subdivisions = 2
+[[objects]]
+shape = "mesh"
+vertices = [[-1.9, -1.9, 2.0], [-0.7, -1.9, 2.0], [-1.9, -0.7, 2.0],
+            [0.0, 0.0, 1.6], [0.0, 1.2, 1.6], [1.2, 0.0, 1.6]]
+simplices = [[0, 1, 2], [3, 4, 5]]
+[render]
+shadows = true
+cull_backfaces = true
+two_sided = false
+samples = SAMPLES
+"#,
+                150,
+                20,
+            ),
+            // One cell.
+            (
+                r#"
+dim = 3
+[camera]
+position = [0.0, 0.0, 3.0]
+look_at = [0.0, 0.0, 0.0]
+up = [[0.0, 1.0, 0.0]]
+fov = 10.0
+resolution = 1
+[[lights]]
+type = "directional"
+direction = [0.2, 0.3, 1.0]
+[[objects]]
+shape = "sphere"
+subdivisions = 1
+[render]
+samples = SAMPLES
+"#,
+                1,
+                0,
+            ),
+            // N = 4, orthographic, a retina of unequal sides with a side of 1.
+            (
+                r#"
+dim = 4
+[camera]
+position = [0.3, 0.2, 0.1, 4.0]
+look_at = [0.0, 0.0, 0.0, 0.0]
+up = [[0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]
+projection = "orthographic"
+extent = 1.5
+resolution = [5, 7, 1]
+[[lights]]
+type = "point"
+position = [1.0, 2.0, 0.5, 3.0]
+[[objects]]
+shape = "hypercube"
+transform = [{ rotate = { plane = [0, 3], degrees = 20.0 } }]
+[render]
+shadows = true
+samples = SAMPLES
+"#,
+                12,
+                0,
+            ),
+            // N = 5 and N = 7, perspective, with shadows between two objects.
+            (
+                r#"
+dim = 5
+[camera]
+position = [0.2, 0.3, 0.1, 0.4, 3.0]
+look_at = [0.0, 0.0, 0.0, 0.0, 0.0]
+up = [[0.0, 1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0, 0.0]]
+fov = 45.0
+resolution = 8
+[[lights]]
+type = "point"
+position = [1.0, 2.0, 0.5, 0.3, 2.5]
+[[objects]]
+shape = "sphere"
+subdivisions = 1
+[[objects]]
+shape = "cross_polytope"
+transform = [{ scale = 0.6 }, { translate = [0.65, 1.3, 0.32, 0.19, 1.6] }]
+[render]
+shadows = true
+samples = SAMPLES
+"#,
+                300,
+                200,
+            ),
+            (
+                r#"
+dim = 7
+[camera]
+position = [0.1, 0.2, 0.1, 0.1, 0.1, 0.1, 3.0]
+look_at = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+up = [[0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+      [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+      [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]]
+fov = 50.0
+resolution = 3
+[[lights]]
+type = "directional"
+direction = [0.3, 1.0, 0.2, 0.1, 0.0, 0.2, 1.0]
+[[objects]]
+shape = "hypercube"
+[render]
+samples = SAMPLES
+"#,
+                700,
+                0,
+            ),
+        ];
+        for (text, lit, shadowed) in cases {
+            for samples in [1, 2, 3] {
+                let text = text.replace("SAMPLES", &samples.to_string());
+                shades_as_one_ray_at_a_time(&text, lit, shadowed);
+            }
         }
     }
 
