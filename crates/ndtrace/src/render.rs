@@ -986,10 +986,10 @@ shadows = true
 
     #[test]
     fn other_cameras_and_dimensions_shade_as_one_ray_at_a_time() {
-        // (scene, cells hit at least, cells with a blocked shadow ray at least).
+        // (scene, cells hit at least, cells with a blocked shadow ray at least), each traced
+        // with 1, 2 and 3 samples per cell.
         let cases = [
-            // N = 2: a 1-D retina of one chunk, a polygon circle shadowing a square, 1 and 3
-            // samples.
+            // N = 2: a 1-D retina of one chunk, a polygon circle shadowing a square.
             (
                 r#"
 dim = 2
@@ -1020,7 +1020,7 @@ samples = SAMPLES
                 1,
             ),
             // Orthographic, one-sided lighting, back-face culling: a triangle facing the camera
-            // and one facing away (culled: the sphere behind it shows), 2 samples.
+            // and one facing away (culled: the sphere behind it shows).
             (
                 r#"
 dim = 3
