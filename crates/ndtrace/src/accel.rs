@@ -57,6 +57,9 @@ use rayon::prelude::*;
 use std::mem::MaybeUninit;
 use std::ops::Range;
 
+/// The ray and hit types of the queries, re-exported from [`crate::ray`].
+pub use crate::ray::{Hit, Ray};
+
 /// Slack of the barycentric inside test: a hit needs `t_k ≥ −BARY_SLACK` for every k.
 ///
 /// Barycentric coordinates are ratios of volumes, hence dimensionless and invariant under
@@ -150,23 +153,6 @@ mod stats {
 pub fn traversal_stats() -> [u64; 3] {
     use std::sync::atomic::Ordering;
     stats::VISITS.each_ref().map(|v| v.load(Ordering::Relaxed))
-}
-
-/// A ray `X(t) = origin + t·dir`; `dir` need not be unit, so t is in units of `|dir|`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Ray<const N: usize> {
-    /// The camera focal point C (or any ray start).
-    pub origin: Vector<N>,
-    /// `P − C`, the direction (not necessarily normalized).
-    pub dir: Vector<N>,
-}
-
-impl<const N: usize> Ray<N> {
-    /// The point `origin + t·dir`.
-    #[inline]
-    pub fn at(&self, t: f64) -> Vector<N> {
-        std::array::from_fn(|i| self.origin[i] + t * self.dir[i])
-    }
 }
 
 /// An (N−1)-simplex in R^N with everything the ray test needs precomputed:
@@ -363,21 +349,6 @@ pub fn simplex_bounds<const N: usize>(points: &[[f64; N]]) -> Bounds<N> {
         }
     }
     (lo, hi)
-}
-
-/// A ray hit: parameter t, the caller's id of the simplex, barycentric coordinates `t_0 … t_{N−1}`
-/// and the simplex's unit normal.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit<const N: usize> {
-    /// Ray parameter (units of `|dir|`).
-    pub t: f64,
-    /// The caller's id of the simplex hit.
-    pub prim: u32,
-    /// Barycentric coordinates of the hit point, summing to 1.
-    pub bary: [f64; N],
-    /// The unit normal n̂ of the simplex ([`PreparedSimplex::normal`], eq. 6 normalized), taken
-    /// from the leaf just tested so that shading needs no lookup by id.
-    pub normal: [f64; N],
 }
 
 /// A wide node: the boxes of its up to `NW` children, structure-of-arrays, and the child
