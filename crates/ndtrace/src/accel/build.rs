@@ -3,12 +3,12 @@
 
 use super::collapse::{id_ranges, wide_tree};
 use super::simplex::{simplex_bounds, Bounds, PreparedSimplex};
-use super::tree::{f32_down, f32_up, half_area, BNode, Bvh, LEAF, MAX_LEAF, W};
+use super::tree::{f32_down, f32_up, half_area, BinaryNode, Bvh, BLOCK_WIDTH, LEAF_TAG, MAX_LEAF};
 use crate::linalg::Vector;
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 
-/// Bins per axis of the SAH build.
+/// SahBins per axis of the SAH build.
 const BINS: usize = 16;
 /// Below this depth SAH decides the binary splits; deeper, object-median splits bound the depth
 /// (they halve a u32-indexed range, so the binary tree has at most `MAX_SAH_DEPTH + 33` levels).
@@ -23,18 +23,19 @@ const PAR_CHUNK: usize = 8 * 1024;
 /// `diameter ≤ √N·max extent ≤ 3·max extent`).
 pub(crate) const BOX_PAD: f64 = 1e-8;
 
-/// Bounds, centroid bounds of a set of simplices.
+/// The bounding box and the box of the centroids of a set of simplices: what the split of the
+/// node over them needs.
 #[derive(Clone, Copy)]
-struct Info<const N: usize> {
+struct NodeBounds<const N: usize> {
     bmin: Vector<N>,
     bmax: Vector<N>,
     cmin: Vector<N>,
     cmax: Vector<N>,
 }
 
-impl<const N: usize> Info<N> {
+impl<const N: usize> NodeBounds<N> {
     fn empty() -> Self {
-        Info {
+        NodeBounds {
             bmin: [f64::INFINITY; N],
             bmax: [f64::NEG_INFINITY; N],
             cmin: [f64::INFINITY; N],
@@ -55,14 +56,14 @@ impl<const N: usize> Info<N> {
 
 /// One SAH bin: count and bounds of the simplices whose centroid falls in it.
 #[derive(Clone, Copy)]
-struct Bin<const N: usize> {
+struct SahBin<const N: usize> {
     count: u32,
     min: Vector<N>,
     max: Vector<N>,
 }
 
-impl<const N: usize> Bin<N> {
-    const EMPTY: Self = Bin {
+impl<const N: usize> SahBin<N> {
+    const EMPTY: Self = SahBin {
         count: 0,
         min: [f64::INFINITY; N],
         max: [f64::NEG_INFINITY; N],
@@ -78,16 +79,16 @@ impl<const N: usize> Bin<N> {
     }
 }
 
-type Bins<const N: usize> = [[Bin<N>; BINS]; N];
+type SahBins<const N: usize> = [[SahBin<N>; BINS]; N];
 
 /// SAH cost weight of n simplices: the number of blocks they fill, since a block tests up to
 /// 4 simplices at the price of one.
 #[inline]
 fn blocks_of(n: u32) -> f64 {
-    n.div_ceil(W as u32) as f64
+    n.div_ceil(BLOCK_WIDTH as u32) as f64
 }
 
-/// Bin of a centroid coordinate: `⌊(c − cmin)·scale⌋` clamped to the last bin. The same
+/// The bin of a centroid coordinate: `⌊(c − cmin)·scale⌋` clamped to the last bin. The same
 /// function bins and partitions, so both agree exactly.
 #[inline(always)]
 fn bin_of(c: f64, cmin: f64, scale: f64) -> usize {
@@ -123,14 +124,14 @@ struct Builder<const N: usize> {
 /// A binary subtree built in parallel: either a flat run of nodes (child indices relative to its
 /// start) or an inner node over two such subtrees. Flattened once at the end, in depth-first
 /// order, so the layout does not depend on which parts were built in parallel.
-enum Built<const N: usize> {
-    Flat(Vec<BNode<N>>),
-    Split(BNode<N>, Box<Built<N>>, Box<Built<N>>),
+enum BuiltSubtree<const N: usize> {
+    Flat(Vec<BinaryNode<N>>),
+    Split(BinaryNode<N>, Box<BuiltSubtree<N>>, Box<BuiltSubtree<N>>),
 }
 
 impl<const N: usize> Builder<N> {
-    fn info_seq(&self, idx: &[u32]) -> Info<N> {
-        let mut info = Info::empty();
+    fn info_seq(&self, idx: &[u32]) -> NodeBounds<N> {
+        let mut info = NodeBounds::empty();
         for &p in idx {
             let (lo, hi) = &self.bounds[p as usize];
             let c = &self.cent[p as usize];
@@ -146,18 +147,18 @@ impl<const N: usize> Builder<N> {
 
     /// Bounds and centroid bounds; min/max are exact, so the parallel reduction gives the same
     /// result as the sequential loop.
-    fn info(&self, idx: &[u32]) -> Info<N> {
+    fn info(&self, idx: &[u32]) -> NodeBounds<N> {
         if idx.len() >= self.par_min.max(2 * PAR_CHUNK) {
             idx.par_chunks(PAR_CHUNK)
                 .map(|c| self.info_seq(c))
-                .reduce(Info::empty, Info::merge)
+                .reduce(NodeBounds::empty, NodeBounds::merge)
         } else {
             self.info_seq(idx)
         }
     }
 
-    fn bin_seq(&self, idx: &[u32], cmin: &Vector<N>, scale: &Vector<N>) -> Bins<N> {
-        let mut bins = [[Bin::EMPTY; BINS]; N];
+    fn bin_seq(&self, idx: &[u32], cmin: &Vector<N>, scale: &Vector<N>) -> SahBins<N> {
+        let mut bins = [[SahBin::EMPTY; BINS]; N];
         for &p in idx {
             let (lo, hi) = &self.bounds[p as usize];
             let c = &self.cent[p as usize];
@@ -171,12 +172,12 @@ impl<const N: usize> Builder<N> {
     }
 
     /// The SAH bins; counts and min/max are exact, so the parallel reduction is deterministic.
-    fn bins(&self, idx: &[u32], cmin: &Vector<N>, scale: &Vector<N>) -> Bins<N> {
+    fn bins(&self, idx: &[u32], cmin: &Vector<N>, scale: &Vector<N>) -> SahBins<N> {
         if idx.len() >= self.par_min.max(2 * PAR_CHUNK) {
             idx.par_chunks(PAR_CHUNK)
                 .map(|c| self.bin_seq(c, cmin, scale))
                 .reduce(
-                    || [[Bin::EMPTY; BINS]; N],
+                    || [[SahBin::EMPTY; BINS]; N],
                     |mut a, b| {
                         for ax in 0..N {
                             for k in 0..BINS {
@@ -194,7 +195,7 @@ impl<const N: usize> Builder<N> {
     /// Chooses how to split the node over `idx` and partitions `idx` accordingly: `None` for a
     /// leaf (at most `MAX_LEAF` simplices: a block tests them at the price of one), `Some(mid)`
     /// for children `idx[..mid]` and `idx[mid..]` (both non-empty).
-    fn split(&self, idx: &mut [u32], info: &Info<N>, depth: usize) -> Option<usize> {
+    fn split(&self, idx: &mut [u32], info: &NodeBounds<N>, depth: usize) -> Option<usize> {
         let n = idx.len();
         if n <= MAX_LEAF {
             return None;
@@ -217,13 +218,13 @@ impl<const N: usize> Builder<N> {
                 }
                 // Suffix sweep: right_cost[s] = area(bins s..) · blocks(bins s..).
                 let mut right_cost = [0.0; BINS];
-                let mut acc = Bin::EMPTY;
+                let mut acc = SahBin::EMPTY;
                 for s in (1..BINS).rev() {
                     let b = &bins[a][s];
                     acc.grow(&b.min, &b.max, b.count);
                     right_cost[s] = half_area(&acc.min, &acc.max) * blocks_of(acc.count);
                 }
-                let mut left = Bin::EMPTY;
+                let mut left = SahBin::EMPTY;
                 for s in 1..BINS {
                     let b = &bins[a][s - 1];
                     left.grow(&b.min, &b.max, b.count);
@@ -263,8 +264,8 @@ impl<const N: usize> Builder<N> {
         Some(mid)
     }
 
-    fn node(info: &Info<N>) -> BNode<N> {
-        BNode {
+    fn node(info: &NodeBounds<N>) -> BinaryNode<N> {
+        BinaryNode {
             min: std::array::from_fn(|i| f32_down(info.bmin[i])),
             max: std::array::from_fn(|i| f32_up(info.bmax[i])),
             first: 0,
@@ -274,7 +275,13 @@ impl<const N: usize> Builder<N> {
 
     /// Sequential build of the subtree over `idx` (at position `offset` of the final order),
     /// appending to `out` with node indices relative to the start of `out`.
-    fn build_seq(&self, idx: &mut [u32], offset: usize, depth: usize, out: &mut Vec<BNode<N>>) {
+    fn build_seq(
+        &self,
+        idx: &mut [u32],
+        offset: usize,
+        depth: usize,
+        out: &mut Vec<BinaryNode<N>>,
+    ) {
         let info = self.info_seq(idx);
         let me = out.len();
         out.push(Self::node(&info));
@@ -293,11 +300,11 @@ impl<const N: usize> Builder<N> {
     }
 
     /// Build of the subtree over `idx`, forking with rayon for large nodes.
-    fn build_par(&self, idx: &mut [u32], offset: usize, depth: usize) -> Built<N> {
+    fn build_par(&self, idx: &mut [u32], offset: usize, depth: usize) -> BuiltSubtree<N> {
         if idx.len() < self.par_min {
             let mut out = Vec::with_capacity(idx.len() / 2 + 1);
             self.build_seq(idx, offset, depth, &mut out);
-            return Built::Flat(out);
+            return BuiltSubtree::Flat(out);
         }
         let info = self.info(idx);
         let mut node = Self::node(&info);
@@ -305,7 +312,7 @@ impl<const N: usize> Builder<N> {
             None => {
                 node.first = offset as u32;
                 node.count = idx.len() as u32;
-                Built::Flat(vec![node])
+                BuiltSubtree::Flat(vec![node])
             }
             Some(mid) => {
                 let (l, r) = idx.split_at_mut(mid);
@@ -313,16 +320,16 @@ impl<const N: usize> Builder<N> {
                     || self.build_par(l, offset, depth + 1),
                     || self.build_par(r, offset + mid, depth + 1),
                 );
-                Built::Split(node, Box::new(bl), Box::new(br))
+                BuiltSubtree::Split(node, Box::new(bl), Box::new(br))
             }
         }
     }
 }
 
 /// Appends a built subtree in depth-first order, rebasing inner nodes' child indices.
-fn flatten<const N: usize>(b: Built<N>, out: &mut Vec<BNode<N>>) {
+fn flatten<const N: usize>(b: BuiltSubtree<N>, out: &mut Vec<BinaryNode<N>>) {
     match b {
-        Built::Flat(v) => {
+        BuiltSubtree::Flat(v) => {
             let base = out.len() as u32;
             out.extend(v.into_iter().map(|mut nd| {
                 if nd.count == 0 {
@@ -331,7 +338,7 @@ fn flatten<const N: usize>(b: Built<N>, out: &mut Vec<BNode<N>>) {
                 nd
             }));
         }
-        Built::Split(node, l, r) => {
+        BuiltSubtree::Split(node, l, r) => {
             let me = out.len();
             out.push(node);
             flatten(*l, out);
@@ -347,7 +354,7 @@ fn flatten<const N: usize>(b: Built<N>, out: &mut Vec<BNode<N>>) {
 pub(super) fn binary_tree<const N: usize>(
     bounds: Vec<Bounds<N>>,
     par_min: usize,
-) -> (Vec<BNode<N>>, Vec<u32>) {
+) -> (Vec<BinaryNode<N>>, Vec<u32>) {
     let n = bounds.len();
     // Pad each box by BOX_PAD of its largest extent, so that it contains the BARY_SLACK band.
     let padded: Vec<(Vector<N>, Vector<N>)> = bounds
@@ -408,7 +415,7 @@ impl<const N: usize> Bvh<N> {
             ids.len() == n && bounds.len() == n,
             "Bvh::build: prims, ids, bounds lengths differ"
         );
-        assert!(n < LEAF as usize, "Bvh::build: too many simplices");
+        assert!(n < LEAF_TAG as usize, "Bvh::build: too many simplices");
         if n == 0 {
             return Bvh {
                 nodes: Vec::new(),

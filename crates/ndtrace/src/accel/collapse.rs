@@ -2,7 +2,9 @@
 //! (the optimal plan), the leaf blocks, and the id ranges of every child slot.
 
 use super::simplex::PreparedSimplex;
-use super::tree::{half_area, BNode, Block, Node, EMPTY, LEAF, NW, W};
+use super::tree::{
+    half_area, BinaryNode, LeafBlock, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
+};
 
 /// How each binary subtree is laid out in the wide tree: the optimal collapse of Ylitie,
 /// Karras and Laine ("Efficient incoherent ray traversal on GPUs through compressed wide BVHs",
@@ -23,19 +25,19 @@ use super::tree::{half_area, BNode, Block, Node, EMPTY, LEAF, NW, W};
 /// The greedy rule (open the child of largest area until 8 slots are used) leaves a small wide
 /// node wherever a subtree did not fit: 66% of the nodes of a 1.3 M-triangle icosphere held 2
 /// leaves.
-pub(super) struct Plan {
+pub(super) struct CollapsePlan {
     /// `slots[b][k − 1]`: how subtree b fills at most k slots: `[0, 0]` in one slot (a leaf
     /// or a wide node's root), else `[j, m]`, j slots to the left child and m to the right.
-    pub(super) slots: Vec<[[u8; 2]; NW]>,
-    /// The split of the `NW` slots of the wide node rooted at inner node b.
+    pub(super) slots: Vec<[[u8; 2]; NODE_WIDTH]>,
+    /// The split of the `NODE_WIDTH` slots of the wide node rooted at inner node b.
     pub(super) wide: Vec<[u8; 2]>,
 }
 
-impl Plan {
-    pub(super) fn new<const N: usize>(bin: &[BNode<N>]) -> Self {
+impl CollapsePlan {
+    pub(super) fn new<const N: usize>(bin: &[BinaryNode<N>]) -> Self {
         let n = bin.len();
-        let mut cost = vec![[0.0f64; NW]; n];
-        let mut slots = vec![[[0u8; 2]; NW]; n];
+        let mut cost = vec![[0.0f64; NODE_WIDTH]; n];
+        let mut slots = vec![[[0u8; 2]; NODE_WIDTH]; n];
         let mut wide = vec![[0u8; 2]; n];
         // Children come after their parent in depth-first order: one pass from the end.
         for b in (0..n).rev() {
@@ -54,14 +56,14 @@ impl Plan {
                 }
                 best
             };
-            let (d, w) = share(NW);
-            let mut row = [(0.0, [0u8; 2]); NW];
+            let (d, w) = share(NODE_WIDTH);
+            let mut row = [(0.0, [0u8; 2]); NODE_WIDTH];
             // A NaN area (from infinite bounds) counts as infinite.
             let area = half_area(&bin[b].min.map(f64::from), &bin[b].max.map(f64::from));
             row[0].0 = if area.is_nan() { f64::INFINITY } else { area } + d;
-            for k in 2..=NW {
-                // D(b, NW) is already known.
-                let (c, how) = if k == NW { (d, w) } else { share(k) };
+            for k in 2..=NODE_WIDTH {
+                // D(b, NODE_WIDTH) is already known.
+                let (c, how) = if k == NODE_WIDTH { (d, w) } else { share(k) };
                 // Opening b must gain: on a tie, fewer slots.
                 row[k - 1] = if c < row[k - 2].0 {
                     (c, how)
@@ -70,19 +72,19 @@ impl Plan {
                 };
             }
             wide[b] = w;
-            for k in 0..NW {
+            for k in 0..NODE_WIDTH {
                 cost[b][k] = row[k].0;
                 slots[b][k] = row[k].1;
             }
         }
-        Plan { slots, wide }
+        CollapsePlan { slots, wide }
     }
 
     /// Appends to `kids`, in left-to-right order, the binary nodes that subtree b puts in its
     /// at most k slots.
     pub(super) fn expand<const N: usize>(
         &self,
-        bin: &[BNode<N>],
+        bin: &[BinaryNode<N>],
         b: usize,
         k: usize,
         kids: &mut Vec<usize>,
@@ -99,19 +101,19 @@ impl Plan {
 
 /// Collapses the binary tree into wide nodes and blocks (both in depth-first order).
 struct Collapse<'a, const N: usize> {
-    bin: &'a [BNode<N>],
-    plan: Plan,
+    bin: &'a [BinaryNode<N>],
+    plan: CollapsePlan,
     /// The input simplices and ids, and the leaf order: `order[j]` is the input index of the
     /// j-th simplex in leaf order.
     prims: &'a [PreparedSimplex<N>],
     ids: &'a [u32],
     order: &'a [u32],
-    nodes: Vec<Node<N>>,
-    blocks: Vec<Block<N>>,
+    nodes: Vec<WideNode<N>>,
+    blocks: Vec<LeafBlock<N>>,
 }
 
 impl<const N: usize> Collapse<'_, N> {
-    /// The reference (node index or `LEAF | block`) of binary node `b`'s subtree.
+    /// The reference (node index or `LEAF_TAG | block`) of binary node `b`'s subtree.
     fn child_ref(&mut self, b: usize) -> u32 {
         if self.bin[b].count > 0 {
             self.leaf(b)
@@ -122,10 +124,10 @@ impl<const N: usize> Collapse<'_, N> {
 
     fn leaf(&mut self, b: usize) -> u32 {
         let nd = self.bin[b];
-        let mut block = Block {
-            m: [[[0.0; W]; N]; N],
-            x0: [[0.0; W]; N],
-            ids: [EMPTY; W],
+        let mut block = LeafBlock {
+            m: [[[0.0; BLOCK_WIDTH]; N]; N],
+            x0: [[0.0; BLOCK_WIDTH]; N],
+            ids: [EMPTY_SLOT; BLOCK_WIDTH],
             count: nd.count,
         };
         for l in 0..nd.count as usize {
@@ -142,27 +144,27 @@ impl<const N: usize> Collapse<'_, N> {
             block.ids[l] = self.ids[src];
         }
         self.blocks.push(block);
-        LEAF | (self.blocks.len() - 1) as u32
+        LEAF_TAG | (self.blocks.len() - 1) as u32
     }
 
-    /// The wide node over binary inner node `b`: its children as the [`Plan`] lays them out,
+    /// The wide node over binary inner node `b`: its children as the [`CollapsePlan`] lays them out,
     /// in left-to-right order.
     fn node(&mut self, b: usize) -> u32 {
         let [j, m] = self.plan.wide[b];
-        let mut kids = Vec::with_capacity(NW);
+        let mut kids = Vec::with_capacity(NODE_WIDTH);
         self.plan.expand(self.bin, b + 1, j as usize, &mut kids);
         self.plan
             .expand(self.bin, self.bin[b].first as usize, m as usize, &mut kids);
-        debug_assert!((2..=NW).contains(&kids.len()));
+        debug_assert!((2..=NODE_WIDTH).contains(&kids.len()));
         let me = self.nodes.len();
-        self.nodes.push(Node::EMPTY);
+        self.nodes.push(WideNode::EMPTY);
         for (l, &c) in kids.iter().enumerate() {
             let r = self.child_ref(c);
             let nd = &mut self.nodes[me];
             nd.child[l] = r;
             for i in 0..N {
-                nd.b[0][i][l] = self.bin[c].min[i];
-                nd.b[1][i][l] = self.bin[c].max[i];
+                nd.bounds[0][i][l] = self.bin[c].min[i];
+                nd.bounds[1][i][l] = self.bin[c].max[i];
             }
         }
         me as u32
@@ -172,17 +174,17 @@ impl<const N: usize> Collapse<'_, N> {
 /// The id range of every child of every node (see [`Bvh::ranges`]). Children come after their
 /// parent in depth-first order, so one pass from the last node up sees every child first.
 pub(super) fn id_ranges<const N: usize>(
-    nodes: &[Node<N>],
-    blocks: &[Block<N>],
-) -> Vec<[[u32; NW]; 2]> {
-    let mut ranges = vec![[[u32::MAX; NW], [0; NW]]; nodes.len()];
+    nodes: &[WideNode<N>],
+    blocks: &[LeafBlock<N>],
+) -> Vec<[[u32; NODE_WIDTH]; 2]> {
+    let mut ranges = vec![[[u32::MAX; NODE_WIDTH], [0; NODE_WIDTH]]; nodes.len()];
     for i in (0..nodes.len()).rev() {
-        for l in 0..NW {
+        for l in 0..NODE_WIDTH {
             let c = nodes[i].child[l];
-            let (lo, hi) = if c == EMPTY {
+            let (lo, hi) = if c == EMPTY_SLOT {
                 (u32::MAX, 0)
-            } else if c & LEAF != 0 {
-                let b = &blocks[(c & !LEAF) as usize];
+            } else if c & LEAF_TAG != 0 {
+                let b = &blocks[(c & !LEAF_TAG) as usize];
                 let ids = &b.ids[..b.count as usize];
                 (
                     ids.iter().copied().min().unwrap(),
@@ -203,14 +205,14 @@ pub(super) fn id_ranges<const N: usize>(
 }
 
 /// The wide nodes and leaf blocks (both in depth-first order) over the binary tree `bin` with
-/// leaf order `order`, laid out by the [`Plan`]; `prims[i]` and `ids[i]` are the input simplices.
+/// leaf order `order`, laid out by the [`CollapsePlan`]; `prims[i]` and `ids[i]` are the input simplices.
 pub(super) fn wide_tree<const N: usize>(
-    bin: &[BNode<N>],
+    bin: &[BinaryNode<N>],
     order: &[u32],
     prims: &[PreparedSimplex<N>],
     ids: &[u32],
-) -> (Vec<Node<N>>, Vec<Block<N>>) {
-    let plan = Plan::new(bin);
+) -> (Vec<WideNode<N>>, Vec<LeafBlock<N>>) {
+    let plan = CollapsePlan::new(bin);
     let mut c = Collapse {
         bin,
         plan,
@@ -222,12 +224,12 @@ pub(super) fn wide_tree<const N: usize>(
     };
     if bin[0].count > 0 {
         // A single leaf: a root node with one child.
-        c.nodes.push(Node::EMPTY);
+        c.nodes.push(WideNode::EMPTY);
         let r = c.leaf(0);
         c.nodes[0].child[0] = r;
         for i in 0..N {
-            c.nodes[0].b[0][i][0] = bin[0].min[i];
-            c.nodes[0].b[1][i][0] = bin[0].max[i];
+            c.nodes[0].bounds[0][i][0] = bin[0].min[i];
+            c.nodes[0].bounds[1][i][0] = bin[0].max[i];
         }
     } else {
         c.node(0);

@@ -1,8 +1,8 @@
 //! Rays prepared for traversal: each ray's simplex-test data plus its conservative `f32` slab-test
 //! data, and packets of up to [`PACKET`] of them.
 
-use super::simplex::RayLocal;
-use super::tree::NW;
+use super::simplex::PreparedRay;
+use super::tree::NODE_WIDTH;
 use crate::ray::Ray;
 use std::mem::MaybeUninit;
 
@@ -10,17 +10,17 @@ use std::mem::MaybeUninit;
 /// ray masks of the traversal, transposed with the children's masks as an 8×8 bit matrix.
 pub const PACKET: usize = 8;
 const _: () = assert!(
-    PACKET == 8 && NW == 8,
+    PACKET == 8 && NODE_WIDTH == 8,
     "transpose8 needs 8 rays × 8 children"
 );
 /// Relative shift of the ray origin that makes the `f32` slab test conservative (see
-/// [`RayPre::new`]); 2⁻²⁰ covers the test's four roundings of ≤ 2⁻²⁴ each with a wide margin.
+/// [`TraversalRay::new`]); 2⁻²⁰ covers the test's four roundings of ≤ 2⁻²⁴ each with a wide margin.
 const SLAB_REL: f64 = 1.0 / (1u32 << 20) as f64;
 
 /// Per-ray data of a traversal: the simplex-test data plus the `f32` slab-test data.
 #[derive(Clone, Copy)]
-pub(super) struct RayPre<const N: usize> {
-    pub(super) local: RayLocal<N>,
+pub(super) struct TraversalRay<const N: usize> {
+    pub(super) prepared: PreparedRay<N>,
     /// 1 when the ray enters slab i through its max side (`d_i` negative, including −0), else 0.
     pub(super) near: [usize; N],
     /// `1/d_i` in f32 (±∞ for a ±0 or tiny component).
@@ -31,12 +31,12 @@ pub(super) struct RayPre<const N: usize> {
     pub(super) o_far: [f32; N],
 }
 
-impl<const N: usize> RayPre<N> {
+impl<const N: usize> TraversalRay<N> {
     /// `reach` bounds the absolute value of every box coordinate of the tree.
     #[inline(always)]
     pub(super) fn new(ray: &Ray<N>, reach: f64) -> Self {
-        let mut pre = RayPre {
-            local: RayLocal::new(ray),
+        let mut pre = TraversalRay {
+            prepared: PreparedRay::new(ray),
             near: [0; N],
             inv: [0.0; N],
             o_near: [0.0; N],
@@ -66,11 +66,11 @@ impl<const N: usize> RayPre<N> {
 
 /// The rays of a packet, prepared for traversal.
 pub(super) struct Packet<const N: usize, const P: usize> {
-    pub(super) pre: [RayPre<N>; P],
-    /// The rays' common [`RayPre::near`] sides, when they all have the same.
+    pub(super) pre: [TraversalRay<N>; P],
+    /// The rays' common [`TraversalRay::near`] sides, when they all have the same.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     pub(super) octant: Option<[usize; N]>,
-    /// Whether every ray has the same shifted f32 origins ([`RayPre::o_near`], `o_far`): the
+    /// Whether every ray has the same shifted f32 origins ([`TraversalRay::o_near`], `o_far`): the
     /// slab planes relative to the origin are then computed once per node (bit-identical).
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     pub(super) shared_origin: bool,
@@ -90,10 +90,10 @@ impl<const N: usize, const P: usize> Packet<N, P> {
         // SAFETY: the pointers are to fields of `slot`, in bounds (q < P), and every field is
         // written before the packet is referenced.
         unsafe {
-            let pre = (&raw mut (*p).pre).cast::<RayPre<N>>();
+            let pre = (&raw mut (*p).pre).cast::<TraversalRay<N>>();
             for q in 0..P {
                 pre.add(q)
-                    .write(RayPre::new(rays.get(q).unwrap_or(&rays[0]), reach));
+                    .write(TraversalRay::new(rays.get(q).unwrap_or(&rays[0]), reach));
             }
             let pre = &(*p).pre;
             (&raw mut (*p).octant).write(

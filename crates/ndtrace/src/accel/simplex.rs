@@ -30,20 +30,21 @@ pub struct PreparedSimplex<const N: usize> {
     pub(super) x0: Vector<N>,
 }
 
-/// The ray quantities the simplex test needs, computed once per ray.
+/// The ray quantities the simplex test needs, computed once per ray: the ray's counterpart of
+/// [`PreparedSimplex`].
 #[derive(Clone, Copy)]
-pub(super) struct RayLocal<const N: usize> {
+pub(super) struct PreparedRay<const N: usize> {
     pub(super) o: Vector<N>,
     pub(super) d: Vector<N>,
     /// `(DEGENERACY_TOLERANCE·|d|)²`: the parallel threshold for `(n̂·d)²`.
     pub(super) par2: f64,
 }
 
-impl<const N: usize> RayLocal<N> {
+impl<const N: usize> PreparedRay<N> {
     #[inline(always)]
     pub(super) fn new(ray: &Ray<N>) -> Self {
         let d2 = dot(&ray.dir, &ray.dir);
-        RayLocal {
+        PreparedRay {
             o: ray.origin,
             d: ray.dir,
             par2: DEGENERACY_TOLERANCE * DEGENERACY_TOLERANCE * d2,
@@ -96,14 +97,19 @@ impl<const N: usize> PreparedSimplex<N> {
     /// the hyperplane, or a zero direction.
     #[inline]
     pub fn intersect(&self, ray: &Ray<N>, tmin: f64, tmax: f64) -> Option<(f64, [f64; N])> {
-        self.hit(&RayLocal::new(ray), tmin, tmax)
+        self.hit(&PreparedRay::new(ray), tmin, tmax)
     }
 
     /// The ray test, in the arithmetic shared bit for bit with the block test of the BVH:
     /// pairwise dot products, and the division by `n̂·d` deferred from the inside test
     /// (`u_k = r_k·w` with `w = (n̂·p)·d − (n̂·d)·p = (n̂·d)·q`, so `t_k = u_k/(n̂·d)`).
     #[inline(always)]
-    pub(super) fn hit(&self, ray: &RayLocal<N>, tmin: f64, tmax: f64) -> Option<(f64, [f64; N])> {
+    pub(super) fn hit(
+        &self,
+        ray: &PreparedRay<N>,
+        tmin: f64,
+        tmax: f64,
+    ) -> Option<(f64, [f64; N])> {
         let n = &self.m[0];
         let den = dot_pairwise(n, &ray.d);
         // Parallel (|n̂·d| ≤ tol·|d|), zero or NaN direction: a miss.

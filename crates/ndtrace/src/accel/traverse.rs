@@ -4,16 +4,16 @@
 use super::build::MAX_SAH_DEPTH;
 use super::kernels::{leaf_slots, prefetch_block, slabs, within};
 use super::packet::{Packet, PACKET};
-use super::simplex::RayLocal;
+use super::simplex::PreparedRay;
 use super::stats;
-use super::tree::{f32_down, f32_up, Block, BlockHits, Bvh, EMPTY, LEAF, NW};
+use super::tree::{f32_down, f32_up, BlockHits, Bvh, LeafBlock, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH};
 use crate::ray::{Hit, Ray};
 use std::mem::MaybeUninit;
 use std::ops::Range;
 
-/// Traversal stack size: a node pushes at most NW − 1 entries, and the wide tree is no deeper
+/// Traversal stack size: a node pushes at most NODE_WIDTH − 1 entries, and the wide tree is no deeper
 /// than the binary one.
-const STACK_SIZE: usize = (NW - 1) * (MAX_SAH_DEPTH + 34) + 2;
+const STACK_SIZE: usize = (NODE_WIDTH - 1) * (MAX_SAH_DEPTH + 34) + 2;
 /// Relative widening of the parameter range used for box culling: covers the rounding of a
 /// simplex's computed t (~N·ε·|x_0 − C| over the distance of C to its hyperplane), so that box
 /// culling never rejects a node holding a simplex whose computed t is within range.
@@ -31,9 +31,9 @@ fn pad_down(t: f64) -> f64 {
     t - t.abs() * T_PAD
 }
 
-/// Best hit so far of a closest-hit traversal.
+/// The best hit so far of one ray of a closest-hit traversal.
 #[derive(Clone, Copy)]
-struct Best<const N: usize> {
+struct BestHit<const N: usize> {
     t: f64,
     id: u32,
     bary: [f64; N],
@@ -199,17 +199,19 @@ impl<const N: usize> Bvh<N> {
         self.any_hits_impl::<true, P>(rays, tmin, tmax, accept, skip, out)
     }
 
-    /// The block of a child reference with the `LEAF` bit.
+    /// The block of a child reference with the `LEAF_TAG` bit.
     #[inline(always)]
-    fn block(&self, child: u32) -> &Block<N> {
-        &self.blocks[(child & !LEAF) as usize]
+    fn block(&self, child: u32) -> &LeafBlock<N> {
+        &self.blocks[(child & !LEAF_TAG) as usize]
     }
 
     /// The address of [`Bvh::block`] for prefetching: no bounds check (a prefetch never
     /// faults), which a few prefetches per node visit would pay for.
     #[inline(always)]
-    fn block_ptr(&self, child: u32) -> *const Block<N> {
-        self.blocks.as_ptr().wrapping_add((child & !LEAF) as usize)
+    fn block_ptr(&self, child: u32) -> *const LeafBlock<N> {
+        self.blocks
+            .as_ptr()
+            .wrapping_add((child & !LEAF_TAG) as usize)
     }
 
     /// Tests a block, with the AVX2 kernel when `AVX` (only instantiated inside functions
@@ -217,8 +219,8 @@ impl<const N: usize> Bvh<N> {
     #[inline(always)]
     fn block_hit<const AVX: bool>(
         &self,
-        block: &Block<N>,
-        ray: &RayLocal<N>,
+        block: &LeafBlock<N>,
+        ray: &PreparedRay<N>,
         tmin: f64,
         tmax: f64,
     ) -> BlockHits<N> {
@@ -233,7 +235,7 @@ impl<const N: usize> Bvh<N> {
 
     /// Tests the children of inner node `cur` against the rays of the packet in the bit set
     /// `rays` (ray q against [lo, limit[q]]) and returns the nearest child met with the rays
-    /// that met it (`EMPTY` if none), after pushing the other children met, farthest first (so
+    /// that met it (`EMPTY_SLOT` if none), after pushing the other children met, farthest first (so
     /// they are popped nearest first). A child's entry parameter is the smallest among its rays.
     /// Without `NEAREST_FIRST` (any-hit queries, whose answer does not depend on the order) the
     /// children go in slot order, unsorted, and those whose ids all lie in `skip` are dropped.
@@ -251,7 +253,7 @@ impl<const N: usize> Bvh<N> {
         lo: f32,
         limit: &[f32; P],
         skip: &Range<u32>,
-        stack: &mut [MaybeUninit<Entry>; STACK_SIZE],
+        stack: &mut [MaybeUninit<StackEntry>; STACK_SIZE],
         sp: &mut usize,
     ) -> (u32, u32) {
         let nd = &self.nodes[cur as usize];
@@ -265,13 +267,13 @@ impl<const N: usize> Bvh<N> {
         let mut mask = (any & 0xff) as u32;
         if !NEAREST_FIRST && !skip.is_empty() {
             let r = &self.ranges[cur as usize];
-            for l in 0..NW {
+            for l in 0..NODE_WIDTH {
                 let inside = skip.start <= r[0][l] && r[1][l] < skip.end;
                 mask &= !((inside as u32) << l);
             }
         }
         if mask == 0 {
-            return (EMPTY, 0);
+            return (EMPTY_SLOT, 0);
         }
         // The slots holding leaves (or nothing), and those holding nothing.
         let (leafy, empty) = leaf_slots::<AVX>(&nd.child);
@@ -281,7 +283,7 @@ impl<const N: usize> Bvh<N> {
             while leaves != 0 {
                 let l = leaves.trailing_zeros() as usize;
                 leaves &= leaves - 1;
-                prefetch_block(self.block_ptr(nd.child[l]), Block::<N>::HEAD);
+                prefetch_block(self.block_ptr(nd.child[l]), LeafBlock::<N>::HEAD);
             }
         }
         // Byte l of `by_child`: the rays that meet child l.
@@ -299,9 +301,9 @@ impl<const N: usize> Bvh<N> {
                 rest &= rest - 1;
                 if NEAREST_FIRST {
                     // Tested soon (unless a hit culls them): fetch them whole now.
-                    prefetch_block(self.block_ptr(nd.child[l]), size_of::<Block<N>>());
+                    prefetch_block(self.block_ptr(nd.child[l]), size_of::<LeafBlock<N>>());
                 }
-                stack[*sp].write(Entry {
+                stack[*sp].write(StackEntry {
                     node: nd.child[l],
                     rays: rays_of(l),
                     t: tn[l],
@@ -313,9 +315,9 @@ impl<const N: usize> Bvh<N> {
         }
         // Insertion sort of the children met by entry parameter (a fixed-trip loop over the
         // lanes predicts better than iterating over the set bits).
-        let mut hits = [(0.0f32, 0usize); NW];
+        let mut hits = [(0.0f32, 0usize); NODE_WIDTH];
         let mut c = 0;
-        for l in 0..NW {
+        for l in 0..NODE_WIDTH {
             if mask & (1 << l) != 0 {
                 let mut j = c;
                 while j > 0 && hits[j - 1].0 > tn[l] {
@@ -328,7 +330,7 @@ impl<const N: usize> Bvh<N> {
         }
         for j in (1..c).rev() {
             let (t, l) = hits[j];
-            stack[*sp].write(Entry {
+            stack[*sp].write(StackEntry {
                 node: nd.child[l],
                 rays: rays_of(l),
                 t,
@@ -343,7 +345,7 @@ impl<const N: usize> Bvh<N> {
     /// parameter is ≤ `limit[q]`, restricted to `alive`), or `None` when the stack is empty.
     #[inline(always)]
     fn pop<const AVX: bool, const P: usize>(
-        stack: &[MaybeUninit<Entry>; STACK_SIZE],
+        stack: &[MaybeUninit<StackEntry>; STACK_SIZE],
         sp: &mut usize,
         limit: &[f32; P],
         alive: u32,
@@ -382,7 +384,7 @@ impl<const N: usize> Bvh<N> {
         let lo = f32_down(pad_down(tmin));
         let mut limit = [f32::NEG_INFINITY; P];
         limit[..k].fill(f32_up(pad_up(tmax)));
-        let mut best = [Best {
+        let mut best = [BestHit {
             t: tmax,
             id: u32::MAX,
             bary: [0.0; N],
@@ -392,12 +394,12 @@ impl<const N: usize> Bvh<N> {
         }; P];
         // Blocks accept t < tmax, then, while a hit is held, t ≤ best.t (ties are settled by id).
         let mut tmax_b = [tmax; P];
-        let mut stack = [MaybeUninit::<Entry>::uninit(); STACK_SIZE];
+        let mut stack = [MaybeUninit::<StackEntry>::uninit(); STACK_SIZE];
         let mut sp = 0usize;
         let (mut cur, mut cur_rays) = (0u32, (1u32 << k) - 1);
         loop {
             // Descend through inner nodes, nearest child first.
-            while cur & LEAF == 0 {
+            while cur & LEAF_TAG == 0 {
                 (cur, cur_rays) = self.descend::<AVX, P, true>(
                     packet,
                     cur,
@@ -409,14 +411,15 @@ impl<const N: usize> Bvh<N> {
                     &mut sp,
                 );
             }
-            if cur != EMPTY {
+            if cur != EMPTY_SLOT {
                 let block = self.block(cur);
-                prefetch_block(block, size_of::<Block<N>>());
+                prefetch_block(block, size_of::<LeafBlock<N>>());
                 let mut left = cur_rays;
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
                     left &= left - 1;
-                    let hits = self.block_hit::<AVX>(block, &packet.pre[q].local, tmin, tmax_b[q]);
+                    let hits =
+                        self.block_hit::<AVX>(block, &packet.pre[q].prepared, tmin, tmax_b[q]);
                     let mut mask = hits.mask;
                     let b = &mut best[q];
                     while mask != 0 {
@@ -424,12 +427,12 @@ impl<const N: usize> Bvh<N> {
                         mask &= mask - 1;
                         let (t, id) = (hits.t[l], block.ids[l]);
                         if (!b.found || t < b.t || (t == b.t && id < b.id)) && accept(id) {
-                            *b = Best {
+                            *b = BestHit {
                                 t,
                                 id,
                                 bary: hits.bary(l),
                                 found: true,
-                                block: cur & !LEAF,
+                                block: cur & !LEAF_TAG,
                                 lane: l as u32,
                             };
                             limit[q] = f32_up(pad_up(t));
@@ -498,24 +501,24 @@ impl<const N: usize> Bvh<N> {
                 alive |= 1 << q;
             }
         }
-        let mut stack = [MaybeUninit::<Entry>::uninit(); STACK_SIZE];
+        let mut stack = [MaybeUninit::<StackEntry>::uninit(); STACK_SIZE];
         let mut sp = 0usize;
         let (mut cur, mut cur_rays) = (0u32, alive);
         while alive != 0 {
-            while cur & LEAF == 0 {
+            while cur & LEAF_TAG == 0 {
                 (cur, cur_rays) = self.descend::<AVX, P, false>(
                     packet, cur, cur_rays, lo, &limit, skip, &mut stack, &mut sp,
                 );
             }
-            if cur != EMPTY {
+            if cur != EMPTY_SLOT {
                 let block = self.block(cur);
-                prefetch_block(block, size_of::<Block<N>>());
+                prefetch_block(block, size_of::<LeafBlock<N>>());
                 let mut left = cur_rays & alive;
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
                     left &= left - 1;
                     let mut mask = self
-                        .block_hit::<AVX>(block, &packet.pre[q].local, tmin, tmax[q])
+                        .block_hit::<AVX>(block, &packet.pre[q].prepared, tmin, tmax[q])
                         .mask;
                     while mask != 0 {
                         let l = mask.trailing_zeros() as usize;
@@ -540,7 +543,7 @@ impl<const N: usize> Bvh<N> {
 /// A traversal stack entry: a subtree, the rays of the packet that met its box, and the
 /// smallest of their entry parameters.
 #[derive(Clone, Copy)]
-struct Entry {
+struct StackEntry {
     node: u32,
     rays: u32,
     t: f32,

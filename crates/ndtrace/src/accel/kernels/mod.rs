@@ -8,17 +8,22 @@ pub(in crate::accel) mod portable;
 #[cfg(target_arch = "x86_64")]
 pub(in crate::accel) mod x86_64;
 
-use super::packet::{Packet, RayPre};
-use super::simplex::RayLocal;
+use super::packet::{Packet, TraversalRay};
+use super::simplex::PreparedRay;
 use super::stats;
-use super::tree::{Block, BlockHits, Node, NW};
+use super::tree::{BlockHits, LeafBlock, WideNode, NODE_WIDTH};
 
-impl<const N: usize> RayPre<N> {
+impl<const N: usize> TraversalRay<N> {
     /// Slab test of the child boxes of a node against the parameter range [lo, hi]: a bit
     /// mask of the boxes met, and their entry parameters (+∞ for the boxes missed); see
     /// `slab_sse` (x86_64) and `slab_portable`.
     #[inline(always)]
-    pub(in crate::accel) fn slab(&self, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
+    pub(in crate::accel) fn slab(
+        &self,
+        node: &WideNode<N>,
+        lo: f32,
+        hi: f32,
+    ) -> (u32, [f32; NODE_WIDTH]) {
         #[cfg(target_arch = "x86_64")]
         return self.slab_sse(node, lo, hi);
         #[cfg(not(target_arch = "x86_64"))]
@@ -26,10 +31,10 @@ impl<const N: usize> RayPre<N> {
     }
 }
 
-impl<const N: usize> Block<N> {
+impl<const N: usize> LeafBlock<N> {
     /// Intersects the ray with every lane (see `hit_sse2` on x86_64, and `hit_portable`).
     #[inline(always)]
-    pub(in crate::accel) fn hit(&self, ray: &RayLocal<N>, tmin: f64, tmax: f64) -> BlockHits<N> {
+    pub(in crate::accel) fn hit(&self, ray: &PreparedRay<N>, tmin: f64, tmax: f64) -> BlockHits<N> {
         #[cfg(target_arch = "x86_64")]
         return self.hit_sse2(ray, tmin, tmax);
         #[cfg(not(target_arch = "x86_64"))]
@@ -43,19 +48,19 @@ impl<const N: usize> Block<N> {
 #[inline(always)]
 pub(in crate::accel) fn slabs<const N: usize, const AVX: bool, const P: usize>(
     packet: &Packet<N, P>,
-    node: &Node<N>,
+    node: &WideNode<N>,
     rays: u32,
     lo: f32,
     limit: &[f32; P],
-) -> (u64, [f32; NW]) {
+) -> (u64, [f32; NODE_WIDTH]) {
     #[cfg(target_arch = "x86_64")]
-    if AVX && NW == 8 {
+    if AVX && NODE_WIDTH == 8 {
         // SAFETY: `AVX` is only true in code running after an AVX2 check.
         return unsafe { x86_64::slabs_avx2(packet, node, rays, lo, limit) };
     }
     let pre = &packet.pre;
     let mut met = 0u64;
-    let mut tn = [f32::INFINITY; NW];
+    let mut tn = [f32::INFINITY; NODE_WIDTH];
     let mut left = rays;
     while left != 0 {
         let q = left.trailing_zeros() as usize;
@@ -63,7 +68,7 @@ pub(in crate::accel) fn slabs<const N: usize, const AVX: bool, const P: usize>(
         stats::count(2);
         let (mask, t) = pre[q].slab(node, lo, limit[q]);
         met |= u64::from(mask) << (8 * q);
-        for l in 0..NW {
+        for l in 0..NODE_WIDTH {
             // Entry parameters of boxes met are never NaN.
             tn[l] = if t[l] < tn[l] { t[l] } else { tn[l] };
         }
@@ -71,7 +76,7 @@ pub(in crate::accel) fn slabs<const N: usize, const AVX: bool, const P: usize>(
     (met, tn)
 }
 
-/// Prefetches the first `bytes` (1 ≤ bytes ≤ its size) bytes of a block: [`Block::HEAD`] (what
+/// Prefetches the first `bytes` (1 ≤ bytes ≤ its size) bytes of a block: [`LeafBlock::HEAD`] (what
 /// a test reads before its early exit) or all of it (408 bytes for N = 3: 7 or 8 cache lines,
 /// depending on where it starts).
 ///
@@ -86,8 +91,8 @@ pub(in crate::accel) fn slabs<const N: usize, const AVX: bool, const P: usize>(
 /// - the heads of all the leaves of a node a packet enters are fetched, met or not: the next
 ///   packets of the tile, a few pixels away, mostly meet the same node's other leaves.
 #[inline(always)]
-pub(in crate::accel) fn prefetch_block<const N: usize>(block: *const Block<N>, bytes: usize) {
-    debug_assert!((1..=size_of::<Block<N>>()).contains(&bytes));
+pub(in crate::accel) fn prefetch_block<const N: usize>(block: *const LeafBlock<N>, bytes: usize) {
+    debug_assert!((1..=size_of::<LeafBlock<N>>()).contains(&bytes));
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (block, bytes);
     #[cfg(target_arch = "x86_64")]
@@ -95,11 +100,11 @@ pub(in crate::accel) fn prefetch_block<const N: usize>(block: *const Block<N>, b
 }
 
 /// The bit sets of the slots of `child` holding a leaf or nothing (those whose reference has
-/// the `LEAF` bit) and of those holding nothing.
+/// the `LEAF_TAG` bit) and of those holding nothing.
 #[inline(always)]
-pub(in crate::accel) fn leaf_slots<const AVX: bool>(child: &[u32; NW]) -> (u32, u32) {
+pub(in crate::accel) fn leaf_slots<const AVX: bool>(child: &[u32; NODE_WIDTH]) -> (u32, u32) {
     #[cfg(target_arch = "x86_64")]
-    if AVX && NW == 8 {
+    if AVX && NODE_WIDTH == 8 {
         // SAFETY: `AVX` is only true in code running after an AVX2 check.
         return unsafe { x86_64::leaf_slots_avx2(child) };
     }

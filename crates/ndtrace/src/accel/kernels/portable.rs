@@ -1,28 +1,30 @@
 //! The portable kernels: the reference the x86_64 kernels are tested against bit for bit, and the
 //! kernels of other targets. Compiled on every target.
 
-use super::super::packet::RayPre;
-use super::super::simplex::{dot_pairwise, RayLocal};
-use super::super::tree::{Block, BlockHits, Node, EMPTY, LEAF, NW, W};
+use super::super::packet::TraversalRay;
+use super::super::simplex::{dot_pairwise, PreparedRay};
+use super::super::tree::{
+    BlockHits, LeafBlock, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
+};
 use super::super::PreparedSimplex;
 use crate::linalg::{sub, Vector};
 
-impl<const N: usize> RayPre<N> {
+impl<const N: usize> TraversalRay<N> {
     /// Portable version of the x86_64 slab test `slab_sse` (same arithmetic, same results).
     #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
     #[inline(always)]
     pub(in crate::accel) fn slab_portable(
         &self,
-        node: &Node<N>,
+        node: &WideNode<N>,
         lo: f32,
         hi: f32,
-    ) -> (u32, [f32; NW]) {
-        let mut tn = [lo; NW];
-        let mut tf = [hi; NW];
+    ) -> (u32, [f32; NODE_WIDTH]) {
+        let mut tn = [lo; NODE_WIDTH];
+        let mut tf = [hi; NODE_WIDTH];
         for i in 0..N {
             let s = self.near[i] & 1;
-            let (bn, bf) = (&node.b[s][i], &node.b[s ^ 1][i]);
-            for l in 0..NW {
+            let (bn, bf) = (&node.bounds[s][i], &node.bounds[s ^ 1][i]);
+            for l in 0..NODE_WIDTH {
                 let a = (bn[l] - self.o_near[i]) * self.inv[i];
                 let c = (bf[l] - self.o_far[i]) * self.inv[i];
                 tn[l] = if a > tn[l] { a } else { tn[l] };
@@ -30,7 +32,7 @@ impl<const N: usize> RayPre<N> {
             }
         }
         let mut mask = 0;
-        for l in 0..NW {
+        for l in 0..NODE_WIDTH {
             let met = tn[l] <= tf[l];
             mask |= (met as u32) << l;
             if !met {
@@ -41,21 +43,21 @@ impl<const N: usize> RayPre<N> {
     }
 }
 
-impl<const N: usize> Block<N> {
+impl<const N: usize> LeafBlock<N> {
     /// Portable version of the x86_64 block test `hit_sse2` (same arithmetic, same results).
     #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
     #[inline(always)]
     pub(in crate::accel) fn hit_portable(
         &self,
-        ray: &RayLocal<N>,
+        ray: &PreparedRay<N>,
         tmin: f64,
         tmax: f64,
     ) -> BlockHits<N> {
         let mut out = BlockHits {
             mask: 0,
-            t: [0.0; W],
-            den: [0.0; W],
-            u: [[0.0; W]; N],
+            t: [0.0; BLOCK_WIDTH],
+            den: [0.0; BLOCK_WIDTH],
+            u: [[0.0; BLOCK_WIDTH]; N],
         };
         for l in 0..self.count as usize {
             let lane = PreparedSimplex {
@@ -80,11 +82,11 @@ impl<const N: usize> Block<N> {
 
 /// The bit sets of the slots of `child` holding a leaf or nothing and of those holding nothing.
 #[inline(always)]
-pub(in crate::accel) fn leaf_slots(child: &[u32; NW]) -> (u32, u32) {
+pub(in crate::accel) fn leaf_slots(child: &[u32; NODE_WIDTH]) -> (u32, u32) {
     let (mut leafy, mut empty) = (0, 0);
     for (l, &c) in child.iter().enumerate() {
-        leafy |= u32::from(c & LEAF != 0) << l;
-        empty |= u32::from(c == EMPTY) << l;
+        leafy |= u32::from(c & LEAF_TAG != 0) << l;
+        empty |= u32::from(c == EMPTY_SLOT) << l;
     }
     (leafy, empty)
 }

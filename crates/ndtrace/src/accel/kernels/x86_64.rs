@@ -3,42 +3,47 @@
 //! exactly the arithmetic of its portable twin in `portable.rs` (the same operations in the same
 //! order, no FMA), which the tests check bit for bit.
 
-use super::super::packet::{Packet, RayPre};
-use super::super::simplex::RayLocal;
+use super::super::packet::{Packet, TraversalRay};
+use super::super::simplex::PreparedRay;
 use super::super::stats;
-use super::super::tree::{Block, BlockHits, Node, NW, W};
+use super::super::tree::{BlockHits, LeafBlock, WideNode, BLOCK_WIDTH, NODE_WIDTH};
 use crate::accel::BARY_SLACK;
 use std::arch::x86_64::*;
 
-impl<const N: usize> RayPre<N> {
+impl<const N: usize> TraversalRay<N> {
     /// Slab test of the child boxes of a node against the parameter range [lo, hi]: a bit
     /// mask of the boxes met, and their entry parameters (+∞ for the boxes missed).
     ///
     /// Conservative: the near and far planes of each slab are chosen by the sign of the
     /// direction and evaluated with the origin moved and rounded to f32 in the safe direction
-    /// (see [`RayPre::new`](super::super::packet::RayPre::new)). A zero direction component (inv = ±∞) gives −∞/+∞ for an origin
+    /// (see [`TraversalRay::new`](super::super::packet::TraversalRay::new)). A zero direction component (inv = ±∞) gives −∞/+∞ for an origin
     /// strictly inside the slab and equal-signed infinities outside it; the one NaN case, `0·∞`
     /// for an origin exactly on a slab plane, is ignored by the running max/min (which keep the
     /// other operand), leaving the slab unrestricted: boxes are closed, and a ray running along
     /// a face is inside.
     #[inline(always)]
-    pub(in crate::accel) fn slab_sse(&self, node: &Node<N>, lo: f32, hi: f32) -> (u32, [f32; NW]) {
+    pub(in crate::accel) fn slab_sse(
+        &self,
+        node: &WideNode<N>,
+        lo: f32,
+        hi: f32,
+    ) -> (u32, [f32; NODE_WIDTH]) {
         use std::arch::x86_64::*;
         let mut mask = 0;
-        let mut out = [0.0f32; NW];
+        let mut out = [0.0f32; NODE_WIDTH];
         // SAFETY: SSE is part of the x86_64 baseline; every pointer loaded or stored is a
-        // `[f32; NW]` accessed in quarters of 16 valid bytes (unaligned accesses).
+        // `[f32; NODE_WIDTH]` accessed in quarters of 16 valid bytes (unaligned accesses).
         unsafe {
-            for q in 0..NW / 4 {
-                let ld = |a: &[f32; NW]| _mm_loadu_ps(a.as_ptr().add(4 * q));
+            for q in 0..NODE_WIDTH / 4 {
+                let ld = |a: &[f32; NODE_WIDTH]| _mm_loadu_ps(a.as_ptr().add(4 * q));
                 let mut near = [_mm_set1_ps(lo); N];
                 let mut far = [_mm_set1_ps(hi); N];
                 for i in 0..N {
                     let s = self.near[i] & 1;
                     let inv = _mm_set1_ps(self.inv[i]);
                     let (on, of) = (_mm_set1_ps(self.o_near[i]), _mm_set1_ps(self.o_far[i]));
-                    let a = _mm_mul_ps(_mm_sub_ps(ld(&node.b[s][i]), on), inv);
-                    let c = _mm_mul_ps(_mm_sub_ps(ld(&node.b[s ^ 1][i]), of), inv);
+                    let a = _mm_mul_ps(_mm_sub_ps(ld(&node.bounds[s][i]), on), inv);
+                    let c = _mm_mul_ps(_mm_sub_ps(ld(&node.bounds[s ^ 1][i]), of), inv);
                     // maxps/minps return their second operand when either is NaN.
                     near[i] = _mm_max_ps(a, near[i]);
                     far[i] = _mm_min_ps(c, far[i]);
@@ -64,7 +69,7 @@ impl<const N: usize> RayPre<N> {
     }
 }
 
-impl<const N: usize> Block<N> {
+impl<const N: usize> LeafBlock<N> {
     /// Intersects the ray with every lane: which lanes are hit with t in (tmin, tmax), and
     /// their data. Per lane, exactly the arithmetic of [`PreparedSimplex::intersect`](crate::accel::PreparedSimplex::intersect) (the same
     /// operations in the same order, hence the same bits). Returns early, before the inside
@@ -72,12 +77,12 @@ impl<const N: usize> Block<N> {
     #[inline(always)]
     pub(in crate::accel) fn hit_sse2(
         &self,
-        ray: &RayLocal<N>,
+        ray: &PreparedRay<N>,
         tmin: f64,
         tmax: f64,
     ) -> BlockHits<N> {
         use std::arch::x86_64::*;
-        const H: usize = W / 2;
+        const H: usize = BLOCK_WIDTH / 2;
         /// Pairwise sum in the order of `simplex::sum_pairwise`.
         #[inline(always)]
         fn sum2<const N: usize>(mut v: [__m128d; N]) -> __m128d {
@@ -95,14 +100,14 @@ impl<const N: usize> Block<N> {
         // SAFETY: SSE2 is part of the x86_64 baseline; every pointer loaded or stored is a
         // `[f64; 4]` accessed as two halves of 16 valid bytes (unaligned accesses).
         unsafe {
-            let ld = |a: &[f64; W], h: usize| _mm_loadu_pd(a.as_ptr().add(2 * h));
+            let ld = |a: &[f64; BLOCK_WIDTH], h: usize| _mm_loadu_pd(a.as_ptr().add(2 * h));
             let zero = _mm_setzero_pd();
             let d: [__m128d; N] = std::array::from_fn(|i| _mm_set1_pd(ray.d[i]));
             let mut out = BlockHits {
                 mask: 0,
-                t: [0.0; W],
-                den: [0.0; W],
-                u: [[0.0; W]; N],
+                t: [0.0; BLOCK_WIDTH],
+                den: [0.0; BLOCK_WIDTH],
+                u: [[0.0; BLOCK_WIDTH]; N],
             };
             let mut den = [zero; H];
             let mut num = [zero; H];
@@ -156,7 +161,7 @@ impl<const N: usize> Block<N> {
         }
     }
 
-    /// The block test of [`Block::hit_sse2`] with the 4 lanes in one AVX register: the same
+    /// The block test of [`LeafBlock::hit_sse2`] with the 4 lanes in one AVX register: the same
     /// operations in the same order (no FMA), hence the same bits, and the same early return.
     ///
     /// # Safety
@@ -165,7 +170,7 @@ impl<const N: usize> Block<N> {
     #[inline]
     pub(in crate::accel) unsafe fn hit_avx2(
         &self,
-        ray: &RayLocal<N>,
+        ray: &PreparedRay<N>,
         tmin: f64,
         tmax: f64,
     ) -> BlockHits<N> {
@@ -183,13 +188,13 @@ impl<const N: usize> Block<N> {
             }
             v[0]
         }
-        let ld = |a: &[f64; W]| _mm256_loadu_pd(a.as_ptr());
+        let ld = |a: &[f64; BLOCK_WIDTH]| _mm256_loadu_pd(a.as_ptr());
         let d: [__m256d; N] = std::array::from_fn(|i| _mm256_set1_pd(ray.d[i]));
         let mut out = BlockHits {
             mask: 0,
-            t: [0.0; W],
-            den: [0.0; W],
-            u: [[0.0; W]; N],
+            t: [0.0; BLOCK_WIDTH],
+            den: [0.0; BLOCK_WIDTH],
+            u: [[0.0; BLOCK_WIDTH]; N],
         };
         let den = sum4::<N>(std::array::from_fn(|i| {
             _mm256_mul_pd(ld(&self.m[0][i]), d[i])
@@ -248,14 +253,14 @@ impl<const N: usize> Block<N> {
 #[inline(always)]
 pub(in crate::accel) unsafe fn slabs_avx2<const N: usize, const P: usize>(
     packet: &Packet<N, P>,
-    node: &Node<N>,
+    node: &WideNode<N>,
     rays: u32,
     lo: f32,
     limit: &[f32; P],
-) -> (u64, [f32; NW]) {
+) -> (u64, [f32; NODE_WIDTH]) {
     use std::arch::x86_64::*;
     // SAFETY (all the intrinsics below): the caller guarantees AVX2; every pointer loaded or
-    // stored is a `[f32; NW]` (unaligned accesses).
+    // stored is a `[f32; NODE_WIDTH]` (unaligned accesses).
     unsafe {
         let mut tn = _mm256_set1_ps(f32::INFINITY);
         let mut met = 0u64;
@@ -264,8 +269,8 @@ pub(in crate::accel) unsafe fn slabs_avx2<const N: usize, const P: usize>(
         let (mut dn, mut df) = ([_mm256_setzero_ps(); N], [_mm256_setzero_ps(); N]);
         if let Some(side) = &packet.octant {
             for i in 0..N {
-                bn[i] = _mm256_loadu_ps(node.b[side[i] & 1][i].as_ptr());
-                bf[i] = _mm256_loadu_ps(node.b[(side[i] & 1) ^ 1][i].as_ptr());
+                bn[i] = _mm256_loadu_ps(node.bounds[side[i] & 1][i].as_ptr());
+                bf[i] = _mm256_loadu_ps(node.bounds[(side[i] & 1) ^ 1][i].as_ptr());
             }
             if packet.shared_origin {
                 // One origin (a pinhole camera's rays): the differences are the same for every
@@ -290,14 +295,14 @@ pub(in crate::accel) unsafe fn slabs_avx2<const N: usize, const P: usize>(
                 left &= left - 1;
                 let side = &packet.pre[q].near;
                 for i in 0..N {
-                    bn[i] = _mm256_loadu_ps(node.b[side[i] & 1][i].as_ptr());
-                    bf[i] = _mm256_loadu_ps(node.b[(side[i] & 1) ^ 1][i].as_ptr());
+                    bn[i] = _mm256_loadu_ps(node.bounds[side[i] & 1][i].as_ptr());
+                    bf[i] = _mm256_loadu_ps(node.bounds[(side[i] & 1) ^ 1][i].as_ptr());
                 }
                 slab_planes(&packet.pre[q], &bn, &bf, &mut dn, &mut df);
                 slab_ray(&packet.pre[q], q, &dn, &df, lo, limit[q], &mut met, &mut tn);
             }
         }
-        let mut out = [0.0f32; NW];
+        let mut out = [0.0f32; NODE_WIDTH];
         _mm256_storeu_ps(out.as_mut_ptr(), tn);
         (met, out)
     }
@@ -310,7 +315,7 @@ pub(in crate::accel) unsafe fn slabs_avx2<const N: usize, const P: usize>(
 /// The CPU must support AVX2.
 #[inline(always)]
 unsafe fn slab_planes<const N: usize>(
-    p: &RayPre<N>,
+    p: &TraversalRay<N>,
     bn: &[std::arch::x86_64::__m256; N],
     bf: &[std::arch::x86_64::__m256; N],
     dn: &mut [std::arch::x86_64::__m256; N],
@@ -335,7 +340,7 @@ unsafe fn slab_planes<const N: usize>(
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 unsafe fn slab_ray<const N: usize>(
-    p: &RayPre<N>,
+    p: &TraversalRay<N>,
     q: usize,
     dn: &[std::arch::x86_64::__m256; N],
     df: &[std::arch::x86_64::__m256; N],
@@ -349,7 +354,7 @@ unsafe fn slab_ray<const N: usize>(
     // SAFETY: the caller guarantees AVX2.
     unsafe {
         // A running max/min from [lo, limit]: maxps/minps return their second operand when
-        // either is NaN, so a NaN parameter leaves its slab unrestricted, as in `RayPre::slab_sse`
+        // either is NaN, so a NaN parameter leaves its slab unrestricted, as in `TraversalRay::slab_sse`
         // (whose pairwise reduction of exact max/min gives the same values).
         let mut near = _mm256_set1_ps(lo);
         let mut far = _mm256_set1_ps(limit);
@@ -382,7 +387,7 @@ pub(in crate::accel) fn prefetch(p: *const i8, bytes: usize) {
 /// # Safety
 /// The CPU must support AVX2.
 #[inline(always)]
-pub(in crate::accel) unsafe fn leaf_slots_avx2(child: &[u32; NW]) -> (u32, u32) {
+pub(in crate::accel) unsafe fn leaf_slots_avx2(child: &[u32; NODE_WIDTH]) -> (u32, u32) {
     // SAFETY: `AVX` is only true in code running after an AVX2 check; `child` holds 8 u32
     // (unaligned load).
     unsafe {

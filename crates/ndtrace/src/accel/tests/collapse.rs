@@ -2,7 +2,10 @@ use super::*;
 
 /// The wide nodes (binary inner nodes) of the layout `plan` gives `bin`, each with its
 /// children, from the root down.
-fn wide_layout<const N: usize>(bin: &[BNode<N>], plan: &Plan) -> Vec<(usize, Vec<usize>)> {
+fn wide_layout<const N: usize>(
+    bin: &[BinaryNode<N>],
+    plan: &CollapsePlan,
+) -> Vec<(usize, Vec<usize>)> {
     let mut out = vec![];
     let mut todo = vec![0];
     while let Some(b) = todo.pop() {
@@ -33,12 +36,12 @@ fn wide_collapse_is_optimal<const N: usize>() {
             continue;
         }
         cases += 1;
-        let plan = Plan::new(&bin);
+        let plan = CollapsePlan::new(&bin);
         let layout = wide_layout(&bin, &plan);
         let mut leaves = 0;
         for (_, kids) in &layout {
             assert!(
-                (2..=NW).contains(&kids.len()),
+                (2..=NODE_WIDTH).contains(&kids.len()),
                 "N={N}: {} children",
                 kids.len()
             );
@@ -48,7 +51,7 @@ fn wide_collapse_is_optimal<const N: usize>() {
         assert_eq!(leaves, binary_leaves, "N={N}: every leaf exactly once");
         let cost: f64 = layout.iter().map(|(b, _)| area(*b)).sum();
         // Brute force over the subsets of the non-root inner nodes.
-        fn slots<const N: usize>(bin: &[BNode<N>], wide: &[bool], c: usize) -> usize {
+        fn slots<const N: usize>(bin: &[BinaryNode<N>], wide: &[bool], c: usize) -> usize {
             if bin[c].count > 0 || wide[c] {
                 1
             } else {
@@ -64,7 +67,7 @@ fn wide_collapse_is_optimal<const N: usize>() {
             wide[0] = true;
             let roots = (0..bin.len()).filter(|&b| wide[b]);
             let valid = roots.clone().all(|b| {
-                slots(&bin, &wide, b + 1) + slots(&bin, &wide, bin[b].first as usize) <= NW
+                slots(&bin, &wide, b + 1) + slots(&bin, &wide, bin[b].first as usize) <= NODE_WIDTH
             });
             if valid {
                 best = best.min(roots.map(area).sum());

@@ -6,15 +6,15 @@ use crate::accel::kernels::x86_64::slabs_avx2;
 fn leaf_slots_agree_with_the_portable_version() {
     let mut r = rng(17);
     for _ in 0..200 {
-        let child: [u32; NW] = std::array::from_fn(|_| match r.random_range(0..3) {
-            0 => EMPTY,
-            1 => LEAF | r.random_range(0..1000u32),
+        let child: [u32; NODE_WIDTH] = std::array::from_fn(|_| match r.random_range(0..3) {
+            0 => EMPTY_SLOT,
+            1 => LEAF_TAG | r.random_range(0..1000u32),
             _ => r.random_range(0..1000u32),
         });
         let (leafy, empty) = leaf_slots::<false>(&child);
         for (l, &c) in child.iter().enumerate() {
-            assert_eq!(leafy >> l & 1 == 1, c == EMPTY || c & LEAF != 0);
-            assert_eq!(empty >> l & 1 == 1, c == EMPTY);
+            assert_eq!(leafy >> l & 1 == 1, c == EMPTY_SLOT || c & LEAF_TAG != 0);
+            assert_eq!(empty >> l & 1 == 1, c == EMPTY_SLOT);
         }
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
@@ -25,13 +25,13 @@ fn leaf_slots_agree_with_the_portable_version() {
 
 #[test]
 fn accel_slab_test_treats_boxes_as_closed() {
-    let mut node = Node::<3>::EMPTY;
+    let mut node = WideNode::<3>::EMPTY;
     for i in 0..3 {
-        node.b[0][i][0] = 0.0;
-        node.b[1][i][0] = 1.0;
+        node.bounds[0][i][0] = 0.0;
+        node.bounds[1][i][0] = 1.0;
     }
     let hit = |origin: [f64; 3], dir: [f64; 3]| {
-        let pre = RayPre::new(&Ray { origin, dir }, 1.0);
+        let pre = TraversalRay::new(&Ray { origin, dir }, 1.0);
         let (mask, tn) = pre.slab(&node, 0.0, f32::INFINITY);
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
@@ -77,7 +77,7 @@ fn accel_slab_test_treats_boxes_as_closed() {
 fn block_kernels_agree<const N: usize>() {
     let mut r = rng(5000 + N as u64);
     for case in 0..400 {
-        let count = 1 + case % W;
+        let count = 1 + case % BLOCK_WIDTH;
         let c = random_vector::<N>(&mut r, 1.0);
         let pts: Vec<[[f64; N]; N]> = (0..count)
             .map(|_| random_simplex(&mut r, &c, 1.0))
@@ -96,7 +96,7 @@ fn block_kernels_agree<const N: usize>() {
             let (pts_l, _) = (&pts[r.random_range(0..count)], 0);
             let dir = crate::linalg::sub(&plane_point(&mut r, pts_l, -0.2, 1.0), &origin);
             let ray = Ray { origin, dir };
-            let local = RayLocal::new(&ray);
+            let local = PreparedRay::new(&ray);
             let mut kernels = vec![block.hit(&local, 0.0, f64::INFINITY)];
             #[cfg(target_arch = "x86_64")]
             if std::is_x86_feature_detected!("avx2") {

@@ -10,13 +10,15 @@ mod traverse;
 mod tree;
 
 use super::build::{binary_tree, PAR_MIN};
-use super::collapse::Plan;
+use super::collapse::CollapsePlan;
 use super::kernels::leaf_slots;
-use super::packet::{Packet, RayPre, PACKET};
-use super::simplex::{simplex_bounds, Bounds, PreparedSimplex, RayLocal};
+use super::packet::{Packet, TraversalRay, PACKET};
+use super::simplex::{simplex_bounds, Bounds, PreparedRay, PreparedSimplex};
 use super::stats;
 use super::traverse::transpose8;
-use super::tree::{f32_up, half_area, BNode, Bvh, Node, EMPTY, LEAF, NW, W};
+use super::tree::{
+    f32_up, half_area, BinaryNode, Bvh, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
+};
 use crate::geometry::{barycentric, hyperplane, ray_hyperplane};
 use crate::linalg::{add, add_scaled, mat_vec, norm, scale, Matrix, Vector};
 use crate::mesh::Mesh;

@@ -7,7 +7,10 @@ fn bvh_agrees_with_brute_force<const N: usize>() {
         let prims = prepare(&s);
         let bvh = build_soup(&s, PAR_MIN);
         assert_eq!(bvh.len(), prims.len());
-        assert!(bvh.blocks.iter().all(|b| (1..=W as u32).contains(&b.count)));
+        assert!(bvh
+            .blocks
+            .iter()
+            .all(|b| (1..=BLOCK_WIDTH as u32).contains(&b.count)));
         let (mut hits, mut ties) = (0, 0);
         for case in 0..1500 {
             let origin = random_vector::<N>(&mut r, 3.5);
@@ -165,11 +168,11 @@ fn skipping_ids_agrees_with_brute_force<const N: usize>() {
     let prims = prepare(&s);
     let bvh = build_soup(&s, PAR_MIN);
     fn subtree<const N: usize>(bvh: &Bvh<N>, c: u32) -> (u32, u32) {
-        if c == EMPTY {
+        if c == EMPTY_SLOT {
             return (u32::MAX, 0);
         }
-        if c & LEAF != 0 {
-            let b = &bvh.blocks[(c & !LEAF) as usize];
+        if c & LEAF_TAG != 0 {
+            let b = &bvh.blocks[(c & !LEAF_TAG) as usize];
             let ids = &b.ids[..b.count as usize];
             return (*ids.iter().min().unwrap(), *ids.iter().max().unwrap());
         }
@@ -181,10 +184,10 @@ fn skipping_ids_agrees_with_brute_force<const N: usize>() {
     }
     let mut pure = 0;
     for (i, nd) in bvh.nodes.iter().enumerate() {
-        for l in 0..NW {
+        for l in 0..NODE_WIDTH {
             let want = subtree(&bvh, nd.child[l]);
             assert_eq!((bvh.ranges[i][0][l], bvh.ranges[i][1][l]), want, "N={N}");
-            pure += (nd.child[l] & LEAF == 0 && want.1 < 150) as usize;
+            pure += (nd.child[l] & LEAF_TAG == 0 && want.1 < 150) as usize;
         }
     }
     assert!(
