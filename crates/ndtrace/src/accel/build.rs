@@ -387,7 +387,7 @@ pub(super) fn binary_tree<const N: usize>(
 
 impl<const N: usize> Bvh<N> {
     /// Builds over prepared simplices; `ids[i]` is the caller's id of `prims[i]` (returned in
-    /// [`Hit::prim`]) and `bounds[i]` the (min, max) corners of its vertices.
+    /// [`Hit::prim`](crate::ray::Hit::prim)) and `bounds[i]` the (min, max) corners of its vertices.
     ///
     /// Deterministic: every decision depends only on the input (bins are integer counts and
     /// min/max, exact in any reduction order; ties go to the lowest axis, bin or index), and the

@@ -23,8 +23,7 @@ use super::tree::{
 /// * with more slots it may also be opened: `S(b, k) = min(S(b, k − 1), D(b, k))`.
 ///
 /// The greedy rule (open the child of largest area until 8 slots are used) leaves a small wide
-/// node wherever a subtree did not fit: 66% of the nodes of a 1.3 M-triangle icosphere held 2
-/// leaves.
+/// node wherever a subtree did not fit (on large meshes, most nodes then hold 2 leaves).
 pub(super) struct CollapsePlan {
     /// `slots[b][k − 1]`: how subtree b fills at most k slots: `[0, 0]` in one slot (a leaf
     /// or a wide node's root), else `[j, m]`, j slots to the left child and m to the right.
@@ -171,7 +170,7 @@ impl<const N: usize> Collapse<'_, N> {
     }
 }
 
-/// The id range of every child of every node (see [`Bvh::ranges`]). Children come after their
+/// The id range of every child of every node (see `Bvh::ranges`). Children come after their
 /// parent in depth-first order, so one pass from the last node up sees every child first.
 pub(super) fn id_ranges<const N: usize>(
     nodes: &[WideNode<N>],

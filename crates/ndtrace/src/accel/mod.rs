@@ -1,6 +1,9 @@
 //! Ray–simplex intersection and a bounding-volume hierarchy over (N−1)-simplices in R^N.
 //!
-//! ## Ray–simplex test (sections "Ray Tracing" and "Barycentric Coordinates")
+//! The algorithm first, in the order a ray meets it; the speed-ups, which change no result,
+//! after it.
+//!
+//! ## 1. Ray–simplex test (sections "Ray Tracing" and "Barycentric Coordinates"; `simplex.rs`)
 //! A [`PreparedSimplex`] stores the unit normal n̂ of its hyperplane (the direction of the
 //! generalized cross product of `x_1 − x_0 … x_{N−1} − x_0`, eq. 6), the N−1 rows `r_k` of the
 //! pseudo-inverse `(EᵀE)⁻¹Eᵀ` of the edge matrix E (the Gram/Cramer form of the barycentric
@@ -9,7 +12,8 @@
 //!
 //! * `t = n̂·(x_0 − C) / n̂·d`;
 //! * `t_k = r_k·(X(t) − x_0) = r_k·(C − x_0) + t·(r_k·d)` for k = 1 … N−1, `t_0 = 1 − Σ t_k`;
-//! * it is a hit when t lies in the open interval `(tmin, tmax)` and every `t_k ≥ −BARY_SLACK`.
+//! * it is a hit when t lies in the open interval `(tmin, tmax)` and every `t_k ≥ −BARY_SLACK`
+//!   ([`BARY_SLACK`]: the scale-free slack that keeps closed meshes watertight).
 //!
 //! The inside test is evaluated without waiting for the division: with `p = x_0 − C`,
 //! `w = (n̂·p)·d − (n̂·d)·p = (n̂·d)·(X(t) − x_0)`, so `u_k = r_k·w = (n̂·d)·t_k` and the signs
@@ -19,44 +23,57 @@
 //! A ray is parallel to the hyperplane (and misses) when `|n̂·d| ≤ DEGENERACY_TOLERANCE·|d|`, the
 //! rule of [`crate::geometry::ray_hyperplane`]. Hits are two-sided: orientation is left to shading.
 //!
-//! ## BVH
-//! [`Bvh`] is built as a binary tree of N-D axis-aligned boxes with binned SAH (16 bins per axis
-//! over the centroid bounds, leaves of at most 4 simplices, object-median split when SAH cannot
-//! split or the tree gets deep), then collapsed into an 8-wide tree (the optimal collapse of
-//! Ylitie et al., which minimises the summed surface measure of the wide nodes):
+//! ## 2. Build: binned SAH (`build.rs`)
+//! [`Bvh::build`] first builds a binary tree of N-D axis-aligned boxes (each simplex's box padded
+//! to hold its `BARY_SLACK` band) with the surface area heuristic, whose weight in N dimensions is
+//! half the (N−1)-measure of a box's boundary (Cauchy's formula): 16 bins per axis over the
+//! centroid bounds, leaves of at most [`MAX_LEAF`] simplices, object-median splits when SAH cannot
+//! split or the tree gets deep. The build is parallel (rayon) for large inputs and produces the
+//! same tree for any number of threads.
 //!
-//! * nodes (a `Vec`, depth-first order) hold the boxes of their up to 8 children as
-//!   structure-of-arrays `f32` (rounded outward, so conservative), slab-tested together
-//!   (SSE, or AVX2 when the CPU has it);
-//! * every leaf is one *block*: its up to 4 prepared simplices stored structure-of-arrays
-//!   (`[f64; 4]` per coefficient, one lane per simplex) with their ids, in leaf order, so one
-//!   block test (SSE2, or one AVX2 register per coefficient) intersects the whole leaf.
+//! ## 3. Wide collapse (`collapse.rs`)
+//! The binary tree is collapsed into an 8-wide tree by the optimal collapse of Ylitie, Karras and
+//! Laine (a dynamic program that minimises the summed boundary measure of the wide nodes). The
+//! boxes of a node's up to 8 children are stored in `f32`, rounded outward (so conservative);
+//! every leaf is one *block* of up to 4 prepared simplices with their ids (`tree.rs`).
 //!
-//! Every SIMD path performs, per lane, exactly the operations of [`PreparedSimplex::intersect`]
-//! in the same order (no FMA), so all paths and the scalar test give bit-identical results.
+//! ## 4. Traversal (`traverse.rs`)
+//! Nearest-first: the children met are visited in order of entry distance, and subtrees whose
+//! entry lies beyond the current best hit are skipped, with an explicit fixed-size stack and no
+//! heap allocation. [`Bvh::closest_hit`] returns the minimum of (t, id) over the accepted hits
+//! (so exact ties are settled by id, whatever the tree's shape); [`Bvh::any_hit`] stops at the
+//! first accepted hit and skips the subtrees whose ids all lie in a given range.
 //!
-//! Traversal is nearest-first (the children met are visited in order of entry distance, and
-//! subtrees whose entry lies beyond the current best hit are skipped) with an explicit
-//! fixed-size stack and no heap allocation; [`Bvh::any_hit`] stops at the first accepted hit.
-//!
-//! Rays travel in packets of up to [`PACKET`] ([`Bvh::closest_hits`], [`Bvh::any_hits`]; the
-//! one-ray calls are packets of one): a node is fetched, slab-tested for each ray of the packet
-//! that reached it, and sorted once for the packet; each stack entry carries the bit set of the
-//! rays that met its box (the masks of 8 rays × 8 children are transposed as an 8×8 bit
-//! matrix), and every ray keeps its own best hit and culling limit. A ray is tested only
-//! against the boxes its own tests led it to, and the leaf tests are exact, so every ray's
-//! result is the one it gets alone — the minimum of (t, id) over its accepted hits — whichever
-//! rays it travels with.
-//! The build is parallel (rayon) for large inputs and produces the same tree for any number of
-//! threads.
+//! ## Speed-ups beside it
+//! * Packets (`packet.rs`, `traverse.rs`): rays travel in packets of up to [`PACKET`]
+//!   ([`Bvh::closest_hits`], [`Bvh::any_hits`]; the one-ray calls are packets of one). A node is
+//!   fetched, slab-tested for each ray of the packet that reached it, and sorted once for the
+//!   packet; each stack entry carries the bit set of the rays that met its box (the masks of
+//!   8 rays × 8 children are transposed as an 8×8 bit matrix), and every ray keeps its own best
+//!   hit and culling limit. A ray is tested only against the boxes its own tests led it to, and
+//!   the leaf tests are exact, so every ray's result is the one it gets alone, whichever rays it
+//!   travels with.
+//! * Structure-of-arrays layout (`tree.rs`): a node's child boxes are slab-tested together, a
+//!   block's simplices (`[f64; 4]` per coefficient, one lane per simplex) intersected together.
+//! * SIMD kernels (`kernels/`): the slab and block tests in SSE2, or AVX2 when the CPU has it
+//!   (`kernels/x86_64.rs`), beside their portable versions (`kernels/portable.rs`), which every
+//!   target compiles. Every kernel performs, per lane, exactly the operations of its portable
+//!   twin and of [`PreparedSimplex::intersect`] in the same order (no FMA), so all paths give
+//!   bit-identical results; the tests compare them bit for bit.
+//! * Prefetches of the leaf blocks a packet will test soon (`kernels/mod.rs`).
 
+// 1. The ray–simplex test.
+mod simplex;
+// 2. The SAH build, and the public constructors.
 mod build;
+// 3. The wide collapse.
 mod collapse;
+// 4. The queries.
+mod traverse;
+// The memory layout of the trees, the rays prepared for traversal, the kernels, the counters.
 mod kernels;
 mod packet;
-mod simplex;
 mod stats;
-mod traverse;
 mod tree;
 
 #[cfg(test)]

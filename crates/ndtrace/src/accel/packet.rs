@@ -6,7 +6,8 @@ use super::tree::NODE_WIDTH;
 use crate::ray::Ray;
 use std::mem::MaybeUninit;
 
-/// Rays traced together by [`Bvh::closest_hits`] and [`Bvh::any_hits`]: one bit each in the
+/// Rays traced together by [`Bvh::closest_hits`](super::Bvh::closest_hits) and
+/// [`Bvh::any_hits`](super::Bvh::any_hits): one bit each in the
 /// ray masks of the traversal, transposed with the children's masks as an 8×8 bit matrix.
 pub const PACKET: usize = 8;
 const _: () = assert!(
@@ -78,8 +79,8 @@ pub(super) struct Packet<const N: usize, const P: usize> {
 
 impl<const N: usize, const P: usize> Packet<N, P> {
     /// Prepares 1 ≤ `rays.len()` ≤ P ≤ [`PACKET`] rays in `slot` (unused slots repeat the
-    /// first ray; no traversal mask ever names them). In place: a packet built apart and moved
-    /// cost a 1 KB copy (a `memcpy` call) per packet.
+    /// first ray; no traversal mask ever names them). In place, so that no packet is built apart
+    /// and copied.
     #[inline(always)]
     pub(super) fn init<'a>(
         slot: &'a mut MaybeUninit<Self>,

@@ -18,7 +18,7 @@ use crate::ray::Ray;
 /// we render, so rays aimed exactly at shared vertices, edges and ridges of a closed mesh hit
 /// at least one of the simplices sharing them. The price is an overlap band of relative width
 /// 1e-9 at shared boundaries, invisible and harmless (the nearer or equal-t, smaller-id simplex
-/// wins). Exact ties are settled deterministically by [`Bvh::closest_hit`].
+/// wins). Exact ties are settled deterministically by [`Bvh::closest_hit`](super::Bvh::closest_hit).
 pub const BARY_SLACK: f64 = 1e-9;
 
 /// An (N−1)-simplex in R^N with everything the ray test needs precomputed:

@@ -93,7 +93,7 @@ pub(super) struct BlockHits<const N: usize> {
 }
 
 impl<const N: usize> BlockHits<N> {
-    /// Barycentric coordinates of lane l, as [`PreparedSimplex::intersect`] computes them.
+    /// Barycentric coordinates of lane l, as [`PreparedSimplex::intersect`](super::PreparedSimplex::intersect) computes them.
     #[inline(always)]
     pub(super) fn bary(&self, l: usize) -> [f64; N] {
         bary_from(&std::array::from_fn(|k| self.u[k][l]), self.den[l])

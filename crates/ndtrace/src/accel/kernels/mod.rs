@@ -25,9 +25,10 @@ impl<const N: usize> TraversalRay<N> {
         hi: f32,
     ) -> (u32, [f32; NODE_WIDTH]) {
         #[cfg(target_arch = "x86_64")]
-        return self.slab_sse(node, lo, hi);
+        let out = self.slab_sse(node, lo, hi);
         #[cfg(not(target_arch = "x86_64"))]
-        return self.slab_portable(node, lo, hi);
+        let out = self.slab_portable(node, lo, hi);
+        out
     }
 }
 
@@ -36,14 +37,15 @@ impl<const N: usize> LeafBlock<N> {
     #[inline(always)]
     pub(in crate::accel) fn hit(&self, ray: &PreparedRay<N>, tmin: f64, tmax: f64) -> BlockHits<N> {
         #[cfg(target_arch = "x86_64")]
-        return self.hit_sse2(ray, tmin, tmax);
+        let out = self.hit_sse2(ray, tmin, tmax);
         #[cfg(not(target_arch = "x86_64"))]
-        return self.hit_portable(ray, tmin, tmax);
+        let out = self.hit_portable(ray, tmin, tmax);
+        out
     }
 }
 
 /// Slab tests of the children of `node` for the rays of the packet in the bit set `rays` (ray q
-/// against [lo, limit[q]]): byte q of the first result holds the children ray q meets, and the
+/// against `[lo, limit[q]]`): byte q of the first result holds the children ray q meets, and the
 /// second the smallest entry parameter per child (+∞ for a child no ray meets).
 #[inline(always)]
 pub(in crate::accel) fn slabs<const N: usize, const AVX: bool, const P: usize>(
@@ -80,11 +82,10 @@ pub(in crate::accel) fn slabs<const N: usize, const AVX: bool, const P: usize>(
 /// a test reads before its early exit) or all of it (408 bytes for N = 3: 7 or 8 cache lines,
 /// depending on where it starts).
 ///
-/// Waiting for blocks took about a fifth of the time on a 1.3 M-triangle icosphere at 512²:
-/// its 66 MB of blocks do not stay in the core's caches from one trace to the next, so the
-/// first test of each block waited for memory, and once more for its last lines (the rows
+/// The blocks of a large mesh do not stay in the core's caches from one trace to the next, so
+/// the first test of a block waits for memory, and once more for its last lines (the rows
 /// `r_k`, the ids), read only after the t test passed. Three prefetches hide part of that
-/// (same results; each about 2-4% faster there, within the noise on the 4D scenes):
+/// (they change no result):
 /// - a block about to be tested is fetched whole, so that its lines arrive together;
 /// - when a packet meets only leaves of a node, those pushed for later are fetched whole while
 ///   the first is tested;

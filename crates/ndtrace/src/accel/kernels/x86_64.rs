@@ -244,9 +244,8 @@ impl<const N: usize> LeafBlock<N> {
 /// ray of the packet has the same direction signs, its near and far planes are picked once).
 ///
 /// Not itself compiled for AVX2 but always inlined, as are its helpers (closures would not be),
-/// so that its intrinsics end up inlined into the AVX2-compiled traversal. As a
-/// `target_feature` function it stayed a call per node visit, returning through memory: 4%
-/// more instructions per ray on an icosphere of 1.3 M triangles.
+/// so that its intrinsics end up inlined into the AVX2-compiled traversal (a `target_feature`
+/// function stays a call per node visit, returning through memory).
 ///
 /// # Safety
 /// The CPU must support AVX2.
