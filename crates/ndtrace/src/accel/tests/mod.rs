@@ -17,7 +17,8 @@ use super::simplex::{simplex_bounds, Bounds, PreparedRay, PreparedSimplex};
 use super::stats;
 use super::traverse::transpose8;
 use super::tree::{
-    f32_up, half_area, BinaryNode, Bvh, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
+    f32_up, half_area, BinaryNode, BlockHits, Bvh, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG,
+    NODE_WIDTH,
 };
 use crate::geometry::{barycentric, hyperplane, ray_hyperplane};
 use crate::linalg::{add, add_scaled, mat_vec, norm, scale, Matrix, Vector};
