@@ -331,10 +331,10 @@ pub fn orient_rows(dim: usize, vertices: &[f64], simplices: &[u32]) -> NdResult<
             expected: format!("a multiple of {N} values"),
             got: format!("{len}"),
         };
-        if vertices.len() % N != 0 {
+        if !vertices.len().is_multiple_of(N) {
             return Err(shape("vertices", vertices.len()));
         }
-        if simplices.len() % N != 0 {
+        if !simplices.len().is_multiple_of(N) {
             return Err(shape("simplices", simplices.len()));
         }
         let nv = vertices.len() / N;

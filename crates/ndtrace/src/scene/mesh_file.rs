@@ -30,7 +30,8 @@ pub(crate) fn read_mesh<const N: usize>(
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("npz"));
     let arrays = if npz {
-        read_npz(&full, &["vertices", "simplices"]).map(|a| [a[0].clone(), a[1].clone()])
+        read_npz(&full, &["vertices", "simplices"])
+            .and_then(|a| <[Array2; 2]>::try_from(a).map_err(|_| "expected two arrays".into()))
     } else if !full.is_file() {
         Err(format!("cannot open {}: no such file", full.display()))
     } else {
