@@ -16,6 +16,8 @@ from .files import read_exr, write_exr, write_image, write_png
 from .scene import Scene, load_dict, load_file, load_toml
 from . import animation
 from .animation import animate
+from . import display
+from .display import show
 
 __version__: str = _ndtrace.__version__
 MIN_DIM: int = _ndtrace.MIN_DIM
@@ -23,5 +25,6 @@ MAX_DIM: int = _ndtrace.MAX_DIM
 
 __all__ = [
     "geometry", "rotation", "frames", "mesh", "Scene", "Retina", "trace", "release_buffers", "composite", "read_exr", "write_exr", "write_image", "write_png", "load_file", "load_dict", "load_toml", "animation", "animate",
+    "display", "show",
     "MIN_DIM", "MAX_DIM", "__version__",
 ]

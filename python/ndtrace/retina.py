@@ -44,6 +44,18 @@ class Retina:
         """Boolean mask of cells whose nearest sample hit something."""
         return self.object_id >= 0
 
+    def __repr__(self) -> str:
+        """One line: dimension, shape, hit fraction and depth range (not the arrays)."""
+        from .display import retina_repr
+
+        return retina_repr(self)
+
+    def _repr_png_(self) -> bytes:
+        """The default composite (``ndtrace.composite(retina)``) as PNG, for notebooks."""
+        from .display import retina_png
+
+        return retina_png(self)
+
 
 def trace(
     scene: Scene,

@@ -178,6 +178,13 @@ class Scene:
 
     __hash__ = None  # type: ignore[assignment]
 
+    def _repr_png_(self) -> bytes:
+        """A preview for notebooks: the scene traced at a small resolution and composited with
+        its own ``[composite]`` options, as PNG (see :func:`ndtrace.display.scene_png`)."""
+        from .display import scene_png
+
+        return scene_png(self)
+
     def __repr__(self) -> str:
         return f"<ndtrace.Scene dim={self.dim} objects={len(self._data.get('objects', []))}>"
 
