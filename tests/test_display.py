@@ -1,8 +1,10 @@
-"""Notebook display: ``Retina.__repr__`` / ``_repr_png_``, ``Scene._repr_png_``, ``ndtrace.show``."""
+"""Notebook display: ``Retina.__repr__`` / ``_repr_png_``, ``Scene._repr_png_``, ``ndtrace.show``
+and ``ndtrace.widget`` (driven through its message handler, as the page's JS drives it)."""
 
 from __future__ import annotations
 
 import io
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -99,3 +101,36 @@ def test_show_refuses_what_is_not_a_picture(bad, match):
 def test_show_composite_keywords_need_a_retina():
     with pytest.raises(ValueError, match="mode: composite keywords go with a Retina"):
         ndtrace.show(np.zeros((2, 2, 4), np.float32), mode="mip")
+
+
+def test_widget_runs_the_viewer_over_custom_messages(tesseract):
+    """The widget answers the page's messages as the server does and sends frames as buffers."""
+    pytest.importorskip("anywidget")
+    w = ndtrace.widget(tesseract, size=(64, 64), draft_cells=8 ** 3)
+    sent, cond = [], threading.Condition()
+
+    def send(content, buffers=None):
+        with cond:
+            sent.append((content, buffers))
+            cond.notify_all()
+
+    w.send = send
+    try:
+        assert "export function mount" in w._esm and "export default" in w._esm and "render({ model, el })" in w._esm
+        assert ".ndv" in w._css
+        w._on_message(w, {"type": "hello", "seq": 1}, [])
+        w._on_message(w, {"type": "roll", "seq": 2, "steps": [[20, 0]]}, [])
+        w._on_message(w, {"type": "release", "seq": 3}, [])
+        w._on_message(w, {"type": "zoom", "seq": 4, "factor": -2}, [])
+        with cond:
+            assert cond.wait_for(lambda: any(c.get("quality") == "full" and c["type"] == "frame" for c, _ in sent), 30)
+        replies = [c["type"] for c, _ in sent if c["type"] != "frame"]  # frames come from the worker
+        assert replies[:4] == ["hello", "state", "state", "error"]
+        error = next(c for c, _ in sent if c["type"] == "error")
+        assert error["seq"] == 4 and "zoom.factor" in error["message"]
+        frame, buffers = next((c, b) for c, b in sent if c["type"] == "frame" and c["quality"] == "full")
+        assert Image.open(io.BytesIO(buffers[0])).size == (64, 64)
+        np.testing.assert_allclose(w.rotation, ndtrace.rotation.rolling_ball([20, 0, 0], 32), atol=1e-14)
+        assert ndtrace.load_toml(w.to_toml()).dim == 4
+    finally:
+        w.close()

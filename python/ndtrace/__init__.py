@@ -18,6 +18,8 @@ from . import animation
 from .animation import animate
 from . import display
 from .display import show
+from . import viewer
+from .viewer import widget
 
 __version__: str = _ndtrace.__version__
 MIN_DIM: int = _ndtrace.MIN_DIM
@@ -25,6 +27,6 @@ MAX_DIM: int = _ndtrace.MAX_DIM
 
 __all__ = [
     "geometry", "rotation", "frames", "mesh", "Scene", "Retina", "trace", "release_buffers", "composite", "read_exr", "write_exr", "write_image", "write_png", "load_file", "load_dict", "load_toml", "animation", "animate",
-    "display", "show",
+    "display", "show", "viewer", "widget",
     "MIN_DIM", "MAX_DIM", "__version__",
 ]

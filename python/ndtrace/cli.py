@@ -7,6 +7,7 @@
     ndtrace scenes/tesseract_spin.toml -o spin.gif --frames 24   # the scene's [animation]
     ndtrace scenes/cube.toml -o cube.jpg --set camera.fov=40 --set objects.0.material.color=[1,0,0]
     python -m ndtrace scenes/cube.toml -o cube.png --transparent   # the same command
+    ndtrace view scenes/tesseract.toml      # the interactive viewer (see ndtrace view --help)
 
 The whole scene is validated before any work; errors are one line on stderr (exit status 2),
 with a traceback only under --debug. Ctrl-C stops within a second, leaves no partial output
@@ -317,7 +318,12 @@ def run(argv: list[str] | None = None) -> int:
 
 
 def main(argv: list[str] | None = None) -> None:
-    debug = "--debug" in (argv if argv is not None else sys.argv[1:])
+    given = sys.argv[1:] if argv is None else argv
+    if given[:1] == ["view"]:  # a scene is a .toml or .py file, never "view"
+        from .viewer.cli import main as view
+
+        sys.exit(view(given[1:]))
+    debug = "--debug" in given
     try:
         code = run(argv)
     except KeyboardInterrupt:

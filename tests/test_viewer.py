@@ -1,0 +1,331 @@
+"""``ndtrace view``: the server as a user starts it, and the page in headless Chromium.
+
+One server process (``ndtrace view scenes/tesseract.toml --port 0 --no-browser``) serves the
+module: its URL is the first line on stdout, requests without the token get 403, it listens on
+127.0.0.1 only, and Ctrl-C stops it cleanly. The page is driven with real mouse input through
+selenium and Debian's chromium + chromium-driver (``.ci/browser-deps`` installs them; without
+them the browser tests skip locally and fail under CI).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ndtrace import rotation as rot
+
+ROOT = Path(__file__).resolve().parents[1]
+URL = re.compile(r"^http://127\.0\.0\.1:(\d+)/\?token=([A-Za-z0-9_-]{20,})$")
+
+
+def start_server(*args: str) -> tuple[subprocess.Popen, str]:
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "ndtrace", "view", *args, "--port", "0", "--no-browser"],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        env=dict(os.environ, PYTHONUNBUFFERED="1"))
+    line = proc.stdout.readline().strip()
+    if not URL.match(line):
+        proc.kill()
+        raise AssertionError(f"first stdout line {line!r} is not the page's URL; stderr: {proc.stderr.read()}")
+    return proc, line
+
+
+def stop_server(proc: subprocess.Popen) -> tuple[int, str]:
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+    try:
+        _, err = proc.communicate(timeout=15)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        raise AssertionError("ndtrace view did not stop within 15 s of Ctrl-C") from None
+    return proc.returncode, err
+
+
+@pytest.fixture(scope="module")
+def server():
+    proc, url = start_server("scenes/tesseract.toml")
+    yield proc, url
+    if proc.poll() is None:
+        stop_server(proc)
+
+
+def status(url: str) -> int:
+    try:
+        with urllib.request.urlopen(url, timeout=10) as r:
+            return r.status
+    except urllib.error.HTTPError as e:
+        return e.code
+
+
+def test_every_request_needs_the_token(server):
+    _, url = server
+    port, token = URL.match(url).groups()
+    base = f"http://127.0.0.1:{port}"
+    assert status(url) == 200
+    with urllib.request.urlopen(url, timeout=10) as r:
+        page = r.read().decode()
+    assert "window.ndtraceViewer" in page and "export function mount" in page
+    assert "http://" not in page.replace("http://127", "")  # no CDN: everything is inline
+    for path in ["/", "/?token=", f"/?token={token[:-1]}", f"/?token={token}x", "/ws",
+                 f"/ws?token={token[::-1]}", "/favicon.ico", "/static/viewer.js", "/../etc/passwd"]:
+        assert status(base + path) == 403, path
+    assert status(f"{base}/nothing?token={token}") == 404
+
+
+def listening_addresses(port: int) -> list[str]:
+    """The local addresses of sockets listening on ``port`` (from /proc/net/tcp and tcp6)."""
+    out = []
+    for name in ("tcp", "tcp6"):
+        path = Path("/proc/net") / name
+        if not path.exists():
+            continue
+        for line in path.read_text().splitlines()[1:]:
+            fields = line.split()
+            local, state = fields[1], fields[3]
+            addr, p = local.split(":")
+            if state == "0A" and int(p, 16) == port:  # 0A = LISTEN
+                out.append(addr)
+    return out
+
+
+def other_addresses() -> list[str]:
+    """This machine's IPv4 addresses outside the loopback range."""
+    found = set()
+    try:
+        for info in socket.getaddrinfo(socket.gethostname(), None, socket.AF_INET):
+            found.add(info[4][0])
+    except OSError:
+        pass
+    try:
+        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        s.connect(("192.0.2.1", 9))  # no packet is sent: this only picks the outgoing interface
+        found.add(s.getsockname()[0])
+        s.close()
+    except OSError:
+        pass
+    return sorted(a for a in found if not a.startswith("127."))
+
+
+@pytest.mark.skipif(not Path("/proc/net/tcp").exists(), reason="needs Linux's /proc/net/tcp")
+def test_the_server_listens_on_loopback_only(server):
+    _, url = server
+    port = int(URL.match(url).group(1))
+    assert listening_addresses(port) == ["0100007F"]  # 127.0.0.1, and nothing on 0.0.0.0 or ::
+    for addr in other_addresses():
+        with socket.socket() as s:
+            s.settimeout(2)
+            assert s.connect_ex((addr, port)) != 0, f"port {port} answers on {addr}"
+
+
+def test_bad_arguments_are_one_line_errors(tmp_path):
+    for args, match in [
+        (["scenes/nothing.toml"], "scenes/nothing.toml: no such file"),
+        (["scenes/tesseract.toml", "--port", "70000"], "--port: expected 0"),
+        (["scenes/tesseract.toml", "--size", "3x"], "--size"),
+        (["scenes/tesseract.toml", "--set", "camera.fov=400"], "camera.fov"),
+    ]:
+        r = subprocess.run([sys.executable, "-m", "ndtrace", "view", *args, "--no-browser"], cwd=ROOT,
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2, (args, r.stderr)
+        assert r.stdout == ""
+        assert r.stderr.startswith("ndtrace view: error: ") and match in r.stderr, r.stderr
+        assert "Traceback" not in r.stderr
+
+
+def test_ctrl_c_stops_the_server_cleanly():
+    proc, url = start_server("scenes/cube.toml")
+    assert status(url) == 200
+    code, err = stop_server(proc)
+    assert code == 0, err
+    assert "Traceback" not in err and "stopped" in err
+
+
+# -- the page in headless Chromium ---------------------------------------------------------------
+
+def browser():
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    driver = shutil.which("chromedriver")
+    missing = []
+    try:
+        import selenium  # noqa: F401
+    except ImportError:
+        missing.append("selenium (pip install selenium)")
+    if not chromium or not driver:
+        missing.append("Debian's chromium and chromium-driver (.ci/browser-deps installs them)")
+    if missing:
+        reason = "the page test needs " + " and ".join(missing)
+        if os.environ.get("CI"):
+            pytest.fail(reason + ": CI must install them")
+        pytest.skip(reason)
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = chromium
+    for flag in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                 "--window-size=1280,860", "--force-device-scale-factor=1"):
+        options.add_argument(flag)
+    return webdriver.Chrome(service=Service(executable_path=driver), options=options)
+
+
+@pytest.fixture(scope="module")
+def page(server):
+    _, url = server
+    driver = browser()
+    try:
+        driver.set_script_timeout(20)
+        driver.get(url)
+        wait(driver, "return window.ndtraceViewer && window.ndtraceViewer.frames >= 1", 30)
+        yield driver
+    finally:
+        driver.quit()
+
+
+def wait(driver, script: str, timeout: float = 20.0):
+    end = time.monotonic() + timeout
+    while True:
+        value = driver.execute_script(script)
+        if value:
+            return value
+        if time.monotonic() > end:
+            logs = driver.execute_script("return document.body.innerText.slice(0, 2000)")
+            raise AssertionError(f"timed out waiting for: {script}\npage: {logs}")
+        time.sleep(0.05)
+
+
+def viewer_state(driver) -> dict:
+    return driver.execute_script("return JSON.parse(JSON.stringify(window.ndtraceViewer))")
+
+
+def settled(driver, frames_before: int) -> dict:
+    """Waits until every input sent was applied and a new full frame was drawn after it."""
+    wait(driver, f"const v = window.ndtraceViewer; return v.acked === v.sent && v.frames > {frames_before}"
+                 " && v.quality === 'full'")
+    return viewer_state(driver)
+
+
+def canvas_scale(driver) -> tuple[float, float, float]:
+    """(picture pixels per CSS pixel, picture width, picture height) of the canvas."""
+    w, h, css = driver.execute_script(
+        "const c = document.querySelector('canvas'); return [c.width, c.height, c.getBoundingClientRect().width]")
+    return w / css, w, h
+
+
+def test_the_page_draws_frames(page):
+    v = viewer_state(page)
+    assert v["frames"] >= 1 and v["lastFrameMs"] > 0
+    assert v["rotation"] == np.eye(4).tolist()
+    title = page.execute_script("return document.querySelector('.ndv-scene').textContent")
+    assert "tesseract.toml" in title and "4D" in title
+
+
+def test_a_drag_is_the_rolling_ball(page):
+    """Real mouse moves (one pointer event per step) across the canvas: the rotation the page
+    holds is M_k ⋯ M_1 with M_i = rolling_ball((dx_i, −dy_i, 0), R) of each step in picture
+    pixels, R half the picture's side; orthonormal with det +1."""
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    canvas = page.find_element("css selector", "canvas")
+    scale, w, h = canvas_scale(page)
+    before = viewer_state(page)
+    steps = [(40, 0), (0, 30), (-25, -10), (15, 22), (-60, 5)]
+    chain = ActionChains(page, duration=0).move_to_element(canvas).click_and_hold()
+    for dx, dy in steps:
+        chain = chain.pause(0.06).move_by_offset(dx, dy)
+    chain.pause(0.06).release().perform()
+    after = settled(page, before["frames"])
+    got = np.array(after["rotation"])
+    want = np.eye(4)
+    for dx, dy in steps:
+        want = rot.rolling_ball([dx * scale, -dy * scale, 0.0], radius=min(w, h) / 2) @ want
+    assert got.shape == (4, 4)
+    np.testing.assert_allclose(got.T @ got, np.eye(4), atol=1e-12)
+    assert abs(np.linalg.det(got) - 1) < 1e-12
+    np.testing.assert_allclose(got, want, atol=1e-9)
+    assert not np.allclose(got, np.eye(4), atol=0.1)
+    assert after["frames"] > before["frames"] and after["lastFrameMs"] > 0
+    matrix = page.execute_script("return document.querySelector('.ndv-matrix').value")
+    assert np.allclose(np.array([[float(v) for v in row.split()] for row in matrix.splitlines()]), got, atol=1e-4)
+
+
+def test_shift_drag_orbits_and_the_wheel_zooms_without_turning_the_object(page):
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.actions.wheel_input import ScrollOrigin
+    from selenium.webdriver.common.keys import Keys
+
+    canvas = page.find_element("css selector", "canvas")
+    scale, _, _ = canvas_scale(page)
+    before = viewer_state(page)
+    (ActionChains(page, duration=0).move_to_element(canvas).key_down(Keys.SHIFT).click_and_hold()
+     .pause(0.06).move_by_offset(50, 0).pause(0.06).move_by_offset(0, -20).pause(0.06).release()
+     .key_up(Keys.SHIFT).perform())
+    after = settled(page, before["frames"])
+    assert after["rotation"] == before["rotation"]
+    az0 = before["options"].get("azimuth", 30)
+    el0 = before["options"].get("elevation", 20)
+    assert after["options"]["azimuth"] == pytest.approx(az0 + 50 * scale * 0.4)
+    assert after["options"]["elevation"] == pytest.approx(el0 - 20 * scale * 0.4)
+    ActionChains(page).scroll_from_origin(ScrollOrigin.from_element(canvas), 0, -200).perform()
+    zoomed = settled(page, after["frames"])
+    assert zoomed["options"]["zoom"] > 1.0
+    assert zoomed["rotation"] == before["rotation"]
+
+
+def test_keys_and_buttons(page):
+    before = viewer_state(page)
+    page.find_element("css selector", "canvas").send_keys("s")  # snap to the nearest axis view
+    snapped = settled(page, before["frames"])
+    r = np.array(snapped["rotation"])
+    assert np.array_equal(np.abs(r).sum(axis=0), np.ones(4)) and np.linalg.det(r) == pytest.approx(1)
+    modes = page.execute_script("return [...document.querySelectorAll('.ndv-mode option')].map(o => o.value)")
+    assert "mip" in modes and "volume" in modes
+    page.execute_script("const s = document.querySelector('.ndv-mode'); s.value = 'mip'; s.dispatchEvent(new Event('change'))")
+    chosen = settled(page, snapped["frames"])
+    assert chosen["options"]["mode"] == "mip"
+    page.execute_script("[...document.querySelectorAll('.ndv-btn')].find(b => b.textContent.startsWith('Reset')).click()")
+    reset = settled(page, chosen["frames"])
+    assert reset["rotation"] == np.eye(4).tolist() and "mode" not in reset["options"]
+    page.execute_script("window.__toml = null; navigator.clipboard.writeText = async (t) => { window.__toml = t; };")
+    page.find_element("css selector", "canvas").send_keys("c")
+    text = wait(page, "return window.__toml || document.querySelector('.ndv-toml').value")
+    import ndtrace
+
+    scene = ndtrace.load_toml(text)
+    assert scene.dim == 4 and scene.to_dict()["objects"][0]["transform"][-1]["matrix"] is not None
+
+
+def test_a_bad_matrix_is_refused_with_a_message(page):
+    before = viewer_state(page)
+    page.execute_script("const m = document.querySelector('.ndv-matrix'); m.value = '1 0 0\\n0 1 0\\n0 0 1';"
+                        "[...document.querySelectorAll('.ndv-btn')].find(b => b.textContent === 'Apply').click()")
+    wait(page, "const v = window.ndtraceViewer; return v.acked === v.sent")
+    text = wait(page, "const m = document.querySelector('.ndv-message'); return !m.hidden && m.textContent")
+    assert "rotation: expected a 4×4 matrix" in text
+    assert viewer_state(page)["rotation"] == before["rotation"]
+
+
+def test_screenshot_shows_the_viewer(page, tmp_path):
+    path = tmp_path / "viewer.png"
+    page.save_screenshot(str(path))
+    from PIL import Image
+
+    image = np.asarray(Image.open(path).convert("RGB"))
+    x0, y0, w, h = page.execute_script(
+        "const r = document.querySelector('canvas').getBoundingClientRect(); return [r.left, r.top, r.width, r.height]")
+    inside = image[int(y0):int(y0 + h), int(x0):int(x0 + w)]
+    # The tesseract is drawn: the canvas is not just its background.
+    assert (inside.astype(int).sum(axis=-1) > 120).mean() > 0.02
+    print(json.dumps({"screenshot": str(path)}))
