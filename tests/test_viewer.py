@@ -130,19 +130,25 @@ def test_the_server_listens_on_loopback_only(server):
             assert s.connect_ex((addr, port)) != 0, f"port {port} answers on {addr}"
 
 
-def test_bad_arguments_are_one_line_errors(tmp_path):
+def test_bad_arguments_are_one_line_errors(capsys, monkeypatch):
+    r = subprocess.run([sys.executable, "-m", "ndtrace", "view", "scenes/nothing.toml", "--no-browser"],
+                       cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert (r.returncode, r.stdout) == (2, "")
+    assert r.stderr == "ndtrace view: error: scenes/nothing.toml: no such file\n"
+    from ndtrace.viewer.cli import main
+
+    monkeypatch.chdir(ROOT)
     for args, match in [
-        (["scenes/nothing.toml"], "scenes/nothing.toml: no such file"),
         (["scenes/tesseract.toml", "--port", "70000"], "--port: expected 0"),
         (["scenes/tesseract.toml", "--size", "3x"], "--size"),
+        (["scenes/tesseract.toml", "--threads", "0"], "--threads: must be at least 1"),
         (["scenes/tesseract.toml", "--set", "camera.fov=400"], "camera.fov"),
+        (["scenes/cube.py"], "no such file"),
     ]:
-        r = subprocess.run([sys.executable, "-m", "ndtrace", "view", *args, "--no-browser"], cwd=ROOT,
-                           capture_output=True, text=True, timeout=60)
-        assert r.returncode == 2, (args, r.stderr)
-        assert r.stdout == ""
-        assert r.stderr.startswith("ndtrace view: error: ") and match in r.stderr, r.stderr
-        assert "Traceback" not in r.stderr
+        assert main([*args, "--no-browser"]) == 2
+        out, err = capsys.readouterr()
+        assert out == "" and err.startswith("ndtrace view: error: ") and match in err, err
+        assert "Traceback" not in err and err.count("\n") == 1
 
 
 def test_ctrl_c_stops_the_server_cleanly():
@@ -182,16 +188,27 @@ def browser():
 
 
 @pytest.fixture(scope="module")
-def page(server):
-    _, url = server
+def chrome():
     driver = browser()
     try:
         driver.set_script_timeout(20)
-        driver.get(url)
-        wait(driver, "return window.ndtraceViewer && window.ndtraceViewer.frames >= 1", 30)
         yield driver
     finally:
         driver.quit()
+
+
+def open_page(driver, url: str):
+    driver.get(url)
+    wait(driver, "return window.ndtraceViewer && window.ndtraceViewer.frames >= 1", 30)
+    return driver
+
+
+@pytest.fixture
+def page(server, chrome):
+    """The tesseract's page (opened again if a test showed another scene)."""
+    if chrome.current_url != server[1]:
+        open_page(chrome, server[1])
+    return chrome
 
 
 def wait(driver, script: str, timeout: float = 20.0):
@@ -315,6 +332,138 @@ def test_a_bad_matrix_is_refused_with_a_message(page):
     text = wait(page, "const m = document.querySelector('.ndv-message'); return !m.hidden && m.textContent")
     assert "rotation: expected a 4×4 matrix" in text
     assert viewer_state(page)["rotation"] == before["rotation"]
+
+
+SPY = """
+window.__points = [];
+const c = document.querySelector('canvas');
+const record = (e) => { const r = c.getBoundingClientRect();
+  window.__points.push([(e.clientX - r.left) * c.width / r.width, (e.clientY - r.top) * c.height / r.height]); };
+c.addEventListener('pointerdown', record);
+c.addEventListener('pointermove', (e) => (e.getCoalescedEvents().length ? e.getCoalescedEvents() : [e]).forEach(record));
+"""
+
+
+def test_the_4d_arcball_mode(page):
+    """In arcball mode a drag is arcball_4d from the press point to the last point (Shoemake's
+    sphere on the picture's disk, quaternion scalar = w), applied to the rotation at the press;
+    ctrl-drag is the right factor."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.keys import Keys
+
+    from ndtrace.viewer import controls
+
+    canvas = page.find_element("css selector", "canvas")
+    page.execute_script(SPY)
+    page.execute_script("[...document.querySelectorAll('.ndv-seg')].find(b => b.textContent === '4D arcball').click()")
+    _, w, h = canvas_scale(page)
+    for right in (False, True):
+        before = viewer_state(page)
+        page.execute_script("window.__points = []")
+        chain = ActionChains(page, duration=0).move_to_element_with_offset(canvas, -30, 20)
+        if right:
+            chain = chain.key_down(Keys.CONTROL)
+        chain = chain.click_and_hold()
+        for dx, dy in [(25, -10), (30, -15), (10, 40)]:
+            chain = chain.pause(0.06).move_by_offset(dx, dy)
+        chain = chain.pause(0.06).release()
+        if right:
+            chain = chain.key_up(Keys.CONTROL)
+        chain.perform()
+        after = settled(page, before["frames"])
+        points = page.execute_script("return window.__points")
+        a0 = controls.arcball_point(*points[0], w, h)
+        a1 = controls.arcball_point(*points[-1], w, h)
+        np.testing.assert_allclose(np.array(after["rotation"]),
+                                   controls.arcball(np.array(before["rotation"]), a0, a1, right=right), atol=1e-9)
+        assert not np.allclose(after["rotation"], before["rotation"], atol=0.05)
+    page.execute_script("[...document.querySelectorAll('.ndv-seg')].find(b => b.textContent === 'Rolling ball').click()")
+
+
+def cube_scene(n: int, path: Path) -> Path:
+    up = [[1.0 if j == k else 0.0 for j in range(n)] for k in range(1, n - 1)]
+    lines = [f"dim = {n}", "[camera]", f"position = {[0.3] * (n - 1) + [4.5]}", f"look_at = {[0] * n}",
+             f"up = {up if n > 3 else up[0]}", "fov = 50", f"resolution = {64 if n == 3 else 8}",
+             "[[lights]]", 'type = "directional"', f"direction = {[0.4] * (n - 1) + [1.0]}",
+             "[[objects]]", 'shape = "hypercube"', "[composite]", "size = [256, 256]"]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.fixture(scope="module")
+def cube_servers(tmp_path_factory):
+    """Servers of hypercubes in 3, 5 and 6 dimensions, started together."""
+    folder = tmp_path_factory.mktemp("cubes")
+    procs = {n: subprocess.Popen(
+        [sys.executable, "-m", "ndtrace", "view", str(cube_scene(n, folder / f"cube{n}.toml")), "--port", "0",
+         "--no-browser"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for n in (3, 5, 6)}
+    urls = {n: p.stdout.readline().strip() for n, p in procs.items()}
+    yield urls
+    for p in procs.values():
+        stop_server(p)
+
+
+@pytest.mark.parametrize("n", [3, 5, 6])
+def test_a_drag_along_x_turns_the_x_and_last_axes_in_every_dimension(n, chrome, cube_servers):
+    """N = 3, 5, 6: a drag along the picture's x turns the plane (x, N−1) only, by atan(dx/R)."""
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    url = cube_servers[n]
+    assert URL.match(url), url
+    open_page(chrome, url)
+    canvas = chrome.find_element("css selector", "canvas")
+    scale, w, h = canvas_scale(chrome)
+    before = viewer_state(chrome)
+    (ActionChains(chrome, duration=0).move_to_element(canvas).click_and_hold().pause(0.06)
+     .move_by_offset(35, 0).pause(0.06).release().perform())
+    after = settled(chrome, before["frames"])
+    want = rot.plane(n, n - 1, 0, np.arctan(35 * scale / (min(w, h) / 2)))
+    np.testing.assert_allclose(np.array(after["rotation"]), want, atol=1e-9)
+    hint = chrome.execute_script("return document.querySelector('.ndv-hint').textContent")
+    assert hint.startswith("drag: turn x–z / y–z" if n == 3 else f"drag: turn x0–x{n - 1} / x1–x{n - 1}")
+    assert chrome.execute_script("return document.querySelector('.ndv-mode').closest('section').hidden") == (n == 3)
+
+
+def test_the_widget_runs_the_same_viewer_js(chrome):
+    """ndtrace.widget's ES module under a stand-in for anywidget's model: render() mounts the
+    viewer, which asks for hello, and draws a frame that arrives as a DataView buffer."""
+    pytest.importorskip("anywidget")
+    import base64
+
+    import ndtrace
+    from ndtrace.viewer.session import ViewSession
+    from ndtrace.viewer.widget import widget_esm
+    from ndtrace.viewer.worker import FULL
+
+    session = ViewSession(ndtrace.load_file(ROOT / "scenes" / "tesseract.toml"), size=(64, 64))
+    session.resolution = [8, 8, 8]
+    session._desc["camera"] = dict(session._desc["camera"], resolution=8)
+    hello = session.hello()
+    meta, png = session.render(session.snapshot(), FULL, lambda: False)
+    chrome.get("about:blank")
+    result = chrome.execute_async_script("""
+        const [esm, hello, meta, png, done] = arguments;
+        const handlers = [], sent = [];
+        const model = { send: (m) => sent.push(m), on: (name, f) => handlers.push([name, f]) };
+        const url = URL.createObjectURL(new Blob([esm], { type: "text/javascript" }));
+        import(url).then(async (mod) => {
+          mod.default.render({ model, el: document.body });
+          const bytes = Uint8Array.from(atob(png), (c) => c.charCodeAt(0));
+          for (const [name, f] of handlers) {
+            f(hello, []);
+            f(meta, [new DataView(bytes.buffer)]);
+          }
+          const end = Date.now() + 10000;
+          while (window.ndtraceViewer.frames < 1 && Date.now() < end) await new Promise((r) => setTimeout(r, 20));
+          done({ names: handlers.map((h) => h[0]), sent, viewer: window.ndtraceViewer,
+                 title: document.querySelector(".ndv-scene").textContent });
+        }).catch((e) => done({ error: String(e) }));
+    """, widget_esm(), hello, meta, base64.b64encode(png).decode())
+    assert "error" not in result, result
+    assert result["names"] == ["msg:custom"]
+    assert result["sent"][0] == {"type": "hello", "seq": 1}
+    assert result["viewer"]["frames"] == 1 and result["viewer"]["lastFrameMs"] == meta["ms"]
+    assert result["viewer"]["rotation"] == np.eye(4).tolist() and "4D" in result["title"]
 
 
 def test_screenshot_shows_the_viewer(page, tmp_path):

@@ -306,11 +306,16 @@ def test_the_view_as_toml_renders_what_the_page_shows():
     s.handle({"type": "roll", "steps": [[30, -10], [5, 40]]})
     s.handle({"type": "set", "options": {"mode": "mip", "opacity": 0.5}})
     s.handle({"type": "orbit", "dx": 20, "dy": 10})
+    s.handle({"type": "zoom", "factor": 2.0})
     text = s.view_toml()
     assert text.startswith("# The view of tesseract.toml")
+    table, refused = s.composite_table()
+    assert "zoom" in table or refused == {"zoom": 2.0}  # a [composite] key once the format has it
+    assert ("zoom = 2.0" in text.split("\n[")[0]) == ("zoom" in refused)
     loaded = ndtrace.load_toml(text)
     table = loaded.to_dict()["composite"]
     assert table["mode"] == "mip" and table["opacity"] == 0.5 and table["azimuth"] == pytest.approx(38)
+    s.handle({"type": "zoom", "factor": 0.5})  # back to 1: what the file can say today
     meta, payload = s.render(s.snapshot(), FULL, lambda: False)
     from ndtrace.composite import scene_options
 

@@ -16,7 +16,6 @@ import importlib
 import inspect
 import io
 import math
-import os
 import time
 import tomllib
 from typing import Any, Callable
@@ -400,33 +399,37 @@ class ViewSession:
         return meta, buf.getvalue()
 
     # -- the view as a scene file ---------------------------------------------------------
-    def composite_table(self) -> dict:
-        """The composite options as a scene's ``[composite]`` table: the keys the scene format
-        of this ndtrace accepts (probed with the loader), the picture's background left to the
-        scene's own ``background``."""
+    def composite_table(self) -> tuple[dict, dict]:
+        """The composite options as a scene's ``[composite]`` table: (the keys the scene format
+        of this ndtrace accepts, probed with the loader; the others). The picture's background
+        is left to the scene's own ``background``."""
         table = {k: v for k, v in self.options.items() if k != "background" or v != self._desc.get("background")}
-        accepted = {}
+        accepted, refused = {}, {}
         probe = {"dim": self.dim, "camera": self._desc["camera"]}
         for key, value in table.items():
             try:
                 load_dict(dict(probe, composite={key: value}))
             except ValueError:
+                refused[key] = value
                 continue
             accepted[key] = value
-        return accepted
+        return accepted, refused
 
     def view_toml(self) -> str:
         """The current view as a complete TOML scene: the objects turned by the rotation (a
         ``{ matrix = … }`` step appended to each ``transform``) and the ``[composite]`` table of
-        the page's options. ``ndtrace FILE -o out.png`` renders what the page shows."""
-        scene = self.frame_scene(self.rotation, FULL, options=self.composite_table())
+        the page's options. ``ndtrace FILE -o out.png`` renders what the page shows (options
+        that this ndtrace's ``[composite]`` table cannot hold are listed in a comment)."""
+        table, refused = self.composite_table()
+        scene = self.frame_scene(self.rotation, FULL, options=table)
+        center = [float(c) for c in self.center]
         header = (f"# The view of {self.name} in `ndtrace view`: every object turned by the {self.dim}×{self.dim} "
-                  f"rotation about {self.center.tolist()}\n# (the last transform step), composited as on the page.\n")
+                  f"rotation about {center}\n# (the last transform step), composited as on the page.\n")
+        if refused:
+            items = ", ".join(f"{k} = {v!r}" for k, v in refused.items())
+            header += f"# Composite options of the page that [composite] does not take here: {items}\n"
         return header + scene.to_toml()
 
     def close(self) -> None:
         self._retina = None
 
-
-def scene_name(path: str) -> str:
-    return os.path.basename(path)

@@ -107,12 +107,17 @@ export function mount(root, transport) {
       el("button", { class: "ndv-btn", title: "use the matrix as typed (rounded entries are re-orthonormalized)", onclick: () => applyMatrix() }, "Apply")),
     tomlDetails,
   );
-  const keys = el("section", { class: "ndv-keys" }, el("h3", { text: "Mouse and keys" }), el("ul", {},
-    el("li", {}, el("b", { text: "drag" }), " rolling ball (or 4D arcball)"),
-    el("li", {}, el("b", { text: "shift-drag" }), " orbit the 3D view of the retina"),
-    el("li", {}, el("b", { text: "wheel" }), " zoom"),
-    el("li", {}, el("b", { text: "M" }), " mode · ", el("b", { text: "[ ]" }), " opacity · ", el("b", { text: "A" }), " arcball"),
-  ));
+  const keyList = el("ul", {});
+  const keys = el("section", { class: "ndv-keys" }, el("h3", { text: "Mouse and keys" }), keyList);
+  function listKeys(msg) {
+    const item = (...parts) => el("li", {}, ...parts.map((p, i) => (i % 2 === 0 ? el("b", { text: p }) : p)));
+    keyList.replaceChildren(
+      item("drag", msg.arcball ? " rolling ball, or the 4D arcball (A toggles)" : " rolling ball"),
+      ...(msg.orbit ? [item("shift-drag", " orbit the 3D view of the retina"), item("wheel", " zoom"),
+        item("M", " next composite mode · ", "[ ]", " opacity"), item("1 2 3", " front, side, top")] : []),
+      item("S", " snap to axes · ", "R", " reset · ", "C", " copy TOML"),
+    );
+  }
   const panel = el("aside", { class: "ndv-panel" }, rotateSection, matrixSection, compositeSection, aidsSection, viewSection, keys);
   const message = el("div", { class: "ndv-message", hidden: "" });
   const main = el("div", { class: "ndv-main" }, stage, panel);
@@ -169,12 +174,14 @@ export function mount(root, transport) {
     if (document.activeElement !== matrix) matrix.value = formatMatrix(msg.rotation);
     const o = msg.options;
     if (hello && hello.dim >= 4) {
+      // A slider the user is holding keeps its own position (this reply may be older).
+      const held = (input) => input.matches(":active");
       modeSelect.value = o.mode ?? "";
       const op = o.opacity ?? 1;
-      opacity.value = fromOpacity(op);
+      if (!held(opacity)) opacity.value = fromOpacity(op);
       opacityValue.textContent = op.toFixed(op < 0.1 ? 3 : 2);
       const dc = o.depth_cue ?? 0;
-      depthCue.value = Math.round(dc * 100);
+      if (!held(depthCue)) depthCue.value = Math.round(dc * 100);
       depthCueValue.textContent = dc.toFixed(2);
       zoomValue.textContent = `${(o.zoom ?? 1).toFixed(2)}×`;
       orbitValue.textContent = `azimuth ${(o.azimuth ?? 30).toFixed(0)}°, elevation ${(o.elevation ?? 20).toFixed(0)}°`;
@@ -204,6 +211,8 @@ export function mount(root, transport) {
     rollHelp = `Rolling ball (course eq. 5): a drag pulls the ${last} axis toward the drag, turning the ${x}–${last} and ${y}–${last} planes; small circles turn ${x}–${y} the other way.`;
     setArcball(arcballMode);
     arcButton.hidden = !msg.arcball;
+    rotateSection.querySelector(".ndv-segs").hidden = !msg.arcball;
+    listKeys(msg);
     matrix.rows = n;
     matrixSection.querySelector(".ndv-matrix-title").textContent = `Rotation in SO(${n})`;
     compositeSection.hidden = !msg.orbit;
