@@ -152,8 +152,30 @@ def test_bad_arguments_are_one_line_errors(capsys, monkeypatch):
 
 
 def test_ctrl_c_stops_the_server_cleanly():
+    """With a page connected and frames coming: the socket is closed, the process exits 0."""
+    import asyncio
+
+    from aiohttp import ClientSession, WSMsgType
+
     proc, url = start_server("scenes/cube.toml")
     assert status(url) == 200
+
+    async def connected() -> tuple[str, object]:
+        async with ClientSession() as client:
+            async with client.ws_connect(url.replace("/?", "/ws?")) as ws:
+                await ws.send_str(json.dumps({"type": "hello", "seq": 1}))
+                hello = json.loads((await ws.receive()).data)
+                while (await ws.receive()).type != WSMsgType.BINARY:  # the first frame
+                    pass
+                await ws.send_str(json.dumps({"type": "roll", "seq": 2, "steps": [[5, 5]]}))
+                proc.send_signal(signal.SIGINT)
+                while True:
+                    msg = await asyncio.wait_for(ws.receive(), 15)
+                    if msg.type in (WSMsgType.CLOSE, WSMsgType.CLOSED, WSMsgType.CLOSING):
+                        return hello["type"], msg.type
+
+    kind, closed = asyncio.run(connected())
+    assert kind == "hello"
     code, err = stop_server(proc)
     assert code == 0, err
     assert "Traceback" not in err and "stopped" in err

@@ -74,7 +74,8 @@ def make_app(make_session: Callable[[], ViewSession], token: str):
 
     async def page(request: web.Request) -> web.Response:
         return web.Response(text=html, content_type="text/html",
-                            headers={"Cache-Control": "no-store", "X-Content-Type-Options": "nosniff"})
+                            headers={"Cache-Control": "no-store", "X-Content-Type-Options": "nosniff",
+                                     "Referrer-Policy": "no-referrer"})
 
     sockets: weakref.WeakSet = weakref.WeakSet()
 

@@ -369,6 +369,8 @@ class ViewSession:
             traced = quality
             self._retina = (key, quality, retina)
             timings["trace"] = (time.perf_counter() - t1) * 1e3
+        if cancelled():  # the composite cannot stop midway: do not start a stale one
+            raise Superseded
         t2 = time.perf_counter()
         options = dict(snap.options)
         if quality == DRAFT:
