@@ -5,7 +5,9 @@ page does, and drags: each step sends one rolling-ball move and waits for the dr
 causes (build the rotated scene + trace the draft retina + composite + encode JPEG + send over
 the websocket + receive), so frames/s is one over the whole loop's time per frame, what a user
 dragging the mouse sees. Prints, per scene, frames/s and the median time of each stage on the
-server (build, trace, composite, encode) and of the round trip.
+server (build, trace, composite, encode), of the round trip, and the process's CPU time per
+frame (user + system, all threads: on a machine shared with other work, frames/s follows the
+cores it gets, while the CPU time per frame stays about the same).
 
 Scenes: the tesseract, the 3-sphere and the 5-cube (``scenes/tesseract.toml``,
 ``sphere3.toml``, ``penteract.toml``) at the default draft resolution (about 32³ = 32768 retina
@@ -19,6 +21,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
+import os
 import statistics
 import time
 from pathlib import Path
@@ -62,7 +65,10 @@ async def drag_loop(scene: ndtrace.Scene, name: str, frames: int, warmup: int, *
                 seq += 1
                 await ws.send_str(json.dumps({"type": "hello", "seq": seq}))
                 await next_frame()
+                cpu0 = None
                 for k in range(warmup + frames):
+                    if k == warmup:
+                        cpu0 = os.times()
                     seq += 1
                     t = time.perf_counter()
                     # A slow circle, 4 picture pixels per step, as a hand drags.
@@ -72,11 +78,13 @@ async def drag_loop(scene: ndtrace.Scene, name: str, frames: int, warmup: int, *
                     if k >= warmup:
                         loops.append(time.perf_counter() - t)
                         metas.append(meta)
+                cpu1 = os.times()
     finally:
         await runner.cleanup()
+    cpu = (cpu1.user + cpu1.system - cpu0.user - cpu0.system) / len(loops)
     med = lambda key: statistics.median(m["timings"].get(key, 0.0) for m in metas)  # noqa: E731
     return {
-        "fps": len(loops) / sum(loops),
+        "fps": len(loops) / sum(loops), "cpu_ms": cpu * 1e3,
         "loop_ms": statistics.median(loops) * 1e3,
         "server_ms": statistics.median(m["ms"] for m in metas),
         "build_ms": med("build"), "trace_ms": med("trace"), "composite_ms": med("composite"),
@@ -95,14 +103,14 @@ def main() -> None:
     a = ap.parse_args()
     print(f"drag loop of ndtrace view: {a.frames} frames per scene, {a.threads} threads, "
           f"draft ≈ {a.draft_cells} retina cells, picture {a.size}² (drafts at half size)")
-    print(f"{'scene':<11} {'retina':>11} {'frames/s':>9} {'loop ms':>8} {'server':>7} {'build':>6} "
-          f"{'trace':>6} {'comp.':>6} {'encode':>6}")
+    print(f"{'scene':<11} {'retina':>11} {'frames/s':>9} {'loop ms':>8} {'CPU ms':>7} {'server':>7} "
+          f"{'build':>6} {'trace':>6} {'comp.':>6} {'encode':>6}")
     for name in a.scenes:
         scene = ndtrace.load_file(SCENES / f"{name}.toml")
         r = asyncio.run(drag_loop(scene, f"{name}.toml", a.frames, a.warmup, threads=a.threads,
                                   draft_cells=a.draft_cells, size=(a.size, a.size)))
         print(f"{name:<11} {'×'.join(map(str, r['retina'])):>11} {r['fps']:9.1f} {r['loop_ms']:8.1f} "
-              f"{r['server_ms']:7.1f} {r['build_ms']:6.1f} {r['trace_ms']:6.1f} {r['composite_ms']:6.1f} "
+              f"{r['cpu_ms']:7.1f} {r['server_ms']:7.1f} {r['build_ms']:6.1f} {r['trace_ms']:6.1f} {r['composite_ms']:6.1f} "
               f"{r['encode_ms']:6.1f}")
 
 

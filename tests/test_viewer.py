@@ -461,6 +461,11 @@ def test_the_widget_runs_the_same_viewer_js(chrome):
     session.resolution = [8, 8, 8]
     session._desc["camera"] = dict(session._desc["camera"], resolution=8)
     hello = session.hello()
+    # Display aids as a composite with these keywords would offer them (session.display_aids).
+    hello["aids"] = [{"name": "fit", "kind": "bool", "default": True, "hint": "bool"},
+                     {"name": "sections", "kind": "number", "default": 0, "hint": "int"},
+                     {"name": "layout", "kind": "choice", "default": "volume", "choices": ["volume", "sections"], "hint": ""},
+                     {"name": "cutaway", "kind": "text", "default": None, "hint": "dict | None"}]
     meta, png = session.render(session.snapshot(), FULL, lambda: False)
     chrome.get("about:blank")
     result = chrome.execute_async_script("""
@@ -477,7 +482,13 @@ def test_the_widget_runs_the_same_viewer_js(chrome):
           }
           const end = Date.now() + 10000;
           while (window.ndtraceViewer.frames < 1 && Date.now() < end) await new Promise((r) => setTimeout(r, 20));
-          done({ names: handlers.map((h) => h[0]), sent, viewer: window.ndtraceViewer,
+          const aid = (name) => document.querySelector(`[data-aid="${name}"]`);
+          const aids = ["fit", "sections", "layout", "cutaway"].map((n) => [n, aid(n).tagName, aid(n).type, aid(n).checked ?? null, aid(n).value]);
+          aid("fit").click();
+          aid("sections").value = "3"; aid("sections").dispatchEvent(new Event("change"));
+          aid("layout").value = "sections"; aid("layout").dispatchEvent(new Event("change"));
+          aid("cutaway").value = "{ plane = [0, 0, 1] }"; aid("cutaway").dispatchEvent(new Event("change"));
+          done({ names: handlers.map((h) => h[0]), sent, aids, viewer: window.ndtraceViewer,
                  title: document.querySelector(".ndv-scene").textContent });
         }).catch((e) => done({ error: String(e) }));
     """, widget_esm(), hello, meta, base64.b64encode(png).decode())
@@ -486,6 +497,10 @@ def test_the_widget_runs_the_same_viewer_js(chrome):
     assert result["sent"][0] == {"type": "hello", "seq": 1}
     assert result["viewer"]["frames"] == 1 and result["viewer"]["lastFrameMs"] == meta["ms"]
     assert result["viewer"]["rotation"] == np.eye(4).tolist() and "4D" in result["title"]
+    assert result["aids"] == [["fit", "INPUT", "checkbox", True, "on"], ["sections", "INPUT", "number", False, "0"],
+                              ["layout", "SELECT", "select-one", None, "volume"], ["cutaway", "INPUT", "text", False, ""]]
+    assert [m["options"] for m in result["sent"] if m["type"] == "set"] == [
+        {"fit": False}, {"sections": 3}, {"layout": "sections"}, {"cutaway": "{ plane = [0, 0, 1] }"}]
 
 
 def test_screenshot_shows_the_viewer(page, tmp_path):

@@ -329,9 +329,14 @@ def test_display_aids_follow_the_composite_signature(monkeypatch):
 
     import ndtrace.viewer.session as session_module
 
+    seen = []
+
     def fake(retina, *, mode="volume", opacity=1.0, fit=True, sections=0, layout="volume",
-             cutaway=None, threads=None):
+             cutaway=None, threads=None, **rest):
         """stand-in"""
+        seen.append(cutaway)
+        if cutaway is not None and "plane" not in cutaway:
+            raise ValueError("cutaway: expected a plane")
 
     monkeypatch.setattr(session_module, "composite", fake)
     monkeypatch.setattr(session_module._composite_module, "LAYOUTS", ("volume", "sections"), raising=False)
@@ -342,6 +347,16 @@ def test_display_aids_follow_the_composite_signature(monkeypatch):
     assert aids["layout"]["kind"] == "choice" and aids["layout"]["choices"] == ["volume", "sections"]
     assert aids["cutaway"]["kind"] == "text"
     assert inspect.signature(fake).parameters["fit"].default is True
+    # A text aid is a TOML value; empty is the default; the composite's own errors come back.
+    s = ViewSession(scene_of_dim(4))
+    state, _ = s.handle({"type": "set", "options": {"cutaway": "{ plane = [0, 0, 1, 0], offset = 0.5 }"}})
+    assert state["options"]["cutaway"] == {"plane": [0, 0, 1, 0], "offset": 0.5} and seen[-1] == state["options"]["cutaway"]
+    with pytest.raises(ValueError, match="cutaway: expected a TOML value"):
+        s.handle({"type": "set", "options": {"cutaway": "{ plane = "}})
+    with pytest.raises(ValueError, match="cutaway: expected a plane"):
+        s.handle({"type": "set", "options": {"cutaway": "{ sphere = 1 }"}})
+    state, _ = s.handle({"type": "set", "options": {"cutaway": "", "fit": False}})
+    assert "cutaway" not in state["options"] and state["options"]["fit"] is False
     # Today's composite has none of these: no aid controls.
     monkeypatch.undo()
     names = {a["name"] for a in display_aids()}

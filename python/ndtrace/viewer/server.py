@@ -87,6 +87,8 @@ def make_app(make_session: Callable[[], ViewSession], token: str):
         outbox: asyncio.Queue = asyncio.Queue()
 
         def emit(meta: dict, payload: bytes | None) -> None:  # from the worker thread
+            if meta.get("type") == "error":  # a frame failed: the terminal hears of it too
+                sys.stderr.write(f"ndtrace view: a frame failed: {meta['message']}\n")
             try:
                 loop.call_soon_threadsafe(outbox.put_nowait, (meta, payload))
             except RuntimeError:  # the loop has closed: the page is gone
