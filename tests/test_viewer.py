@@ -354,6 +354,8 @@ def test_a_bad_matrix_is_refused_with_a_message(page):
     text = wait(page, "const m = document.querySelector('.ndv-message'); return !m.hidden && m.textContent")
     assert "rotation: expected a 4×4 matrix" in text
     assert viewer_state(page)["rotation"] == before["rotation"]
+    shown = page.execute_script("return document.querySelector('.ndv-matrix').value")
+    assert len(shown.splitlines()) == 4  # the field shows the current rotation again
 
 
 SPY = """

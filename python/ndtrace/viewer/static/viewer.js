@@ -204,7 +204,7 @@ export function mount(root, transport) {
     stage.style.setProperty("--aspect", `${msg.picture[0]} / ${msg.picture[1]}`);
     const res = msg.resolution.join("×");
     title.textContent = `${msg.scene} · ${msg.dim}D · retina ${res} (drafts ${msg.draft.join("×")})`;
-    document.title = `${msg.scene} — ndtrace view`;
+    if (root === document.body) document.title = `${msg.scene} — ndtrace view`;
     const n = msg.dim;
     const last = axisName(n, n - 1), x = axisName(n, 0), y = axisName(n, 1);
     hint.textContent = `drag: turn ${x}–${last} / ${y}–${last}` + (msg.orbit ? " · shift-drag: orbit the 3D view · wheel: zoom" : "");
@@ -261,6 +261,7 @@ export function mount(root, transport) {
     else if (meta.type === "toml") onToml(meta);
     else if (meta.type === "error") {
       if (meta.seq != null) state.acked = Math.max(state.acked, meta.seq);
+      if (document.activeElement !== matrix && state.rotation.length) matrix.value = formatMatrix(state.rotation);
       showMessage(meta.message);
     }
   });
