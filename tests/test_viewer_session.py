@@ -511,3 +511,17 @@ def test_a_full_trace_is_cancelled_through_the_progress_callback():
 
 def test_draft_cells_default_is_32_cubed():
     assert DRAFT_CELLS == 32 ** 3
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"size": (0, 10)}, "size: width and height must be at least 1"),
+    ({"size": "big"}, "size: expected"),
+    ({"draft_cells": 0}, "draft_cells: expected an integer ≥ 1"),
+    ({"threads": 1.5}, "threads: expected an integer"),
+    ({"draft_scale": 2}, "draft_scale: expected a number in"),
+])
+def test_session_arguments_are_checked(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        ViewSession(scene_of_dim(4), **kwargs)
+    with pytest.raises(TypeError, match="scene: expected an ndtrace.Scene"):
+        ViewSession({"dim": 4})

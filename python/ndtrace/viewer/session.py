@@ -135,7 +135,9 @@ class ViewSession:
 
     ``size`` is the picture (W, H) in pixels (default: the scene's ``[composite]`` size, else
     512×512); drafts trace about ``draft_cells`` retina cells and composite at ``draft_scale``
-    of the picture's size; ``threads`` as for :func:`ndtrace.trace`.
+    of the picture's size; ``threads`` as for :func:`ndtrace.trace`. The rotation turns the
+    objects about the camera's ``look_at`` point (the origin for a camera given by its
+    ``orientation``). Bad arguments raise ValueError naming them.
     """
 
     def __init__(self, scene: Scene, *, size: tuple[int, int] | None = None,
@@ -143,6 +145,18 @@ class ViewSession:
                  threads: int | None = None, name: str | None = None) -> None:
         if not isinstance(scene, Scene):
             raise TypeError(f"scene: expected an ndtrace.Scene, got {type(scene).__name__}")
+        for arg, value, low in (("draft_cells", draft_cells, 1), ("threads", threads, 1)):
+            if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low):
+                raise ValueError(f"{arg}: expected an integer ≥ {low}, got {value!r}")
+        if not 0 < draft_scale <= 1:
+            raise ValueError(f"draft_scale: expected a number in (0, 1], got {draft_scale!r}")
+        if size is not None:
+            try:
+                w, h = (int(v) for v in size)
+            except (TypeError, ValueError):
+                raise ValueError(f"size: expected (width, height) in pixels, got {size!r}") from None
+            if w < 1 or h < 1:
+                raise ValueError(f"size: width and height must be at least 1, got {size!r}")
         self.scene = scene
         self.name = name or "scene"
         desc = scene.to_dict()
@@ -168,7 +182,8 @@ class ViewSession:
         self.modes = composite_modes()
         self.aids = display_aids() if self.dim >= 4 else []
         params = _parameters()
-        self._mode_default = params["mode"].default if "mode" in params else None
+        default = params["mode"].default if "mode" in params else None
+        self._mode_default = default if isinstance(default, str) else None
 
     # -- what the page is told -----------------------------------------------------------
     def hello(self) -> dict:
