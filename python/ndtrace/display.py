@@ -114,6 +114,22 @@ def retina_repr(retina) -> str:
     return f"<ndtrace.Retina dim={retina.dim} shape={shape} hit={frac:.1%} {depth}>"
 
 
+def camera_resolution(camera: dict, dim: int) -> list[int]:
+    """A scene description's ``camera.resolution`` as R_1 … R_{N−1}."""
+    res = camera["resolution"]
+    return [int(res)] * (dim - 1) if isinstance(res, (int, np.integer)) else [int(r) for r in res]
+
+
+def reduced_resolution(resolution: list[int], cells: int) -> list[int]:
+    """A retina resolution with about ``cells`` cells: every axis scaled by the same factor
+    (never up), at least 2 cells per axis."""
+    total = math.prod(resolution)
+    if total <= cells:
+        return list(resolution)
+    f = (cells / total) ** (1.0 / len(resolution))
+    return [max(2, round(r * f)) for r in resolution]
+
+
 def scene_png(scene) -> bytes:
     """``Scene._repr_png_``: the scene traced at a small resolution (about
     :data:`PREVIEW_CELLS` cells, one sample each) and composited with its own options at about
@@ -126,12 +142,7 @@ def scene_png(scene) -> bytes:
     data.pop("animation", None)
     camera = data["camera"]
     dim = int(data["dim"])
-    res = camera["resolution"]
-    res = [int(res)] * (dim - 1) if isinstance(res, (int, np.integer)) else [int(r) for r in res]
-    total = math.prod(res)
-    if total > PREVIEW_CELLS:
-        f = (PREVIEW_CELLS / total) ** (1.0 / len(res))
-        res = [max(2, round(r * f)) for r in res]
+    res = reduced_resolution(camera_resolution(camera, dim), PREVIEW_CELLS)
     data["camera"] = dict(camera, resolution=res)
     data["render"] = dict(data.get("render") or {}, samples=1)
     small = load_dict(data, base=scene._base, name="<preview>")

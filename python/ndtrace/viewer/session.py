@@ -23,6 +23,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..composite import composite, scene_options
+from ..display import camera_resolution, reduced_resolution
 from ..files import to_srgb8
 from ..retina import Retina, trace
 from ..scene import Scene, load_dict
@@ -115,19 +116,10 @@ class Snapshot:
     options: dict
 
 
-def _resolution(camera: dict, dim: int) -> list[int]:
-    res = camera["resolution"]
-    return [int(res)] * (dim - 1) if isinstance(res, (int, np.integer)) else [int(r) for r in res]
-
-
 def draft_resolution(resolution: list[int], cells: int = DRAFT_CELLS) -> list[int]:
     """The retina resolution of a draft: every axis scaled by the same factor so that about
     ``cells`` cells remain (never more than the full frame's), at least 2 per axis."""
-    total = math.prod(resolution)
-    if total <= cells:
-        return list(resolution)
-    f = (cells / total) ** (1.0 / len(resolution))
-    return [max(2, round(r * f)) for r in resolution]
+    return reduced_resolution(resolution, cells)
 
 
 class ViewSession:
@@ -165,7 +157,7 @@ class ViewSession:
         self.dim = int(desc["dim"])
         camera = desc["camera"]
         self.center = np.asarray(camera.get("look_at") or [0.0] * self.dim, dtype=float)
-        self.resolution = _resolution(camera, self.dim)
+        self.resolution = camera_resolution(camera, self.dim)
         self.draft = draft_resolution(self.resolution, draft_cells)
         self.draft_scale = float(draft_scale)
         self.threads = threads
