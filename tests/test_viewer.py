@@ -31,9 +31,15 @@ ROOT = Path(__file__).resolve().parents[1]
 URL = re.compile(r"^http://127\.0\.0\.1:(\d+)/\?token=([A-Za-z0-9_-]{20,})$")
 
 
+def ndtrace_command() -> list[str]:
+    """The ``ndtrace`` command installed beside this Python, else ``python -m ndtrace``."""
+    script = Path(sys.executable).with_name("ndtrace")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "ndtrace"]
+
+
 def start_server(*args: str) -> tuple[subprocess.Popen, str]:
     proc = subprocess.Popen(
-        [sys.executable, "-m", "ndtrace", "view", *args, "--port", "0", "--no-browser"],
+        [*ndtrace_command(), "view", *args, "--port", "0", "--no-browser"],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         env=dict(os.environ, PYTHONUNBUFFERED="1"))
     line = proc.stdout.readline().strip()
@@ -43,8 +49,8 @@ def start_server(*args: str) -> tuple[subprocess.Popen, str]:
     return proc, line
 
 
-def stop_server(proc: subprocess.Popen) -> tuple[int, str]:
-    if proc.poll() is None:
+def stop_server(proc: subprocess.Popen, interrupt: bool = True) -> tuple[int, str]:
+    if interrupt and proc.poll() is None:
         proc.send_signal(signal.SIGINT)
     try:
         _, err = proc.communicate(timeout=15)
@@ -176,9 +182,18 @@ def test_ctrl_c_stops_the_server_cleanly():
 
     kind, closed = asyncio.run(connected())
     assert kind == "hello"
-    code, err = stop_server(proc)
+    code, err = stop_server(proc, interrupt=False)  # the one Ctrl-C above
     assert code == 0, err
     assert "Traceback" not in err and "stopped" in err
+
+
+def test_a_second_ctrl_c_still_ends_it_quietly():
+    proc, url = start_server("scenes/cube.toml")
+    proc.send_signal(signal.SIGINT)
+    time.sleep(0.05)
+    code, err = stop_server(proc)
+    assert code in (0, 130), err
+    assert "Traceback" not in err and err.rstrip().endswith("stopped")
 
 
 # -- the page in headless Chromium ---------------------------------------------------------------

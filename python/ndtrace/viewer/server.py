@@ -159,7 +159,11 @@ def serve(scene: Scene, *, port: int = 0, open_browser: bool = True, name: str |
     ViewSession(scene, **kwargs)  # the options are checked before the server starts
     token = secrets.token_urlsafe(24)
     app = make_app(lambda: ViewSession(scene, **kwargs), token)
-    asyncio.run(_serve(app, port, token, open_browser, out))
+    try:
+        asyncio.run(_serve(app, port, token, open_browser, out))
+    finally:
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, signal.SIG_IGN)  # stopping: a late Ctrl-C changes nothing
 
 
 async def _serve(app, port: int, token: str, open_browser: bool, out: TextIO) -> None:
@@ -192,4 +196,16 @@ async def _serve(app, port: int, token: str, open_browser: bool, out: TextIO) ->
     try:
         await stop.wait()
     finally:
+        # A second Ctrl-C while the pages are closed ends the process at once.
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                loop.add_signal_handler(sig, _forced_exit)
+            except (NotImplementedError, RuntimeError, ValueError):
+                pass
         await runner.cleanup()
+
+
+def _forced_exit() -> None:
+    sys.stderr.write("ndtrace view: stopped\n")
+    sys.stderr.flush()
+    os._exit(130)
