@@ -9,6 +9,7 @@ them the browser tests skip locally and fail under CI).
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import re
@@ -24,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from ndtrace import rotation as rot
 
@@ -171,8 +173,13 @@ def test_ctrl_c_stops_the_server_cleanly():
             async with client.ws_connect(url.replace("/?", "/ws?")) as ws:
                 await ws.send_str(json.dumps({"type": "hello", "seq": 1}))
                 hello = json.loads((await ws.receive()).data)
-                while (await ws.receive()).type != WSMsgType.BINARY:  # the first frame
+                while (msg := await ws.receive()).type != WSMsgType.BINARY:  # the first frame
                     pass
+                n = int.from_bytes(msg.data[:4], "little")
+                meta = json.loads(msg.data[4:4 + n])
+                image = Image.open(io.BytesIO(msg.data[4 + n:]))
+                assert meta["type"] == "frame" and image.format == meta["format"].upper()
+                assert image.size == (meta["width"], meta["height"]) and meta["ms"] > 0
                 await ws.send_str(json.dumps({"type": "roll", "seq": 2, "steps": [[5, 5]]}))
                 proc.send_signal(signal.SIGINT)
                 while True:
@@ -523,8 +530,6 @@ def test_the_widget_runs_the_same_viewer_js(chrome):
 def test_screenshot_shows_the_viewer(page, tmp_path):
     path = tmp_path / "viewer.png"
     page.save_screenshot(str(path))
-    from PIL import Image
-
     image = np.asarray(Image.open(path).convert("RGB"))
     x0, y0, w, h = page.execute_script(
         "const r = document.querySelector('canvas').getBoundingClientRect(); return [r.left, r.top, r.width, r.height]")
