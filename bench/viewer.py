@@ -11,7 +11,7 @@ cores it gets, while the CPU time per frame stays about the same).
 
 Scenes: the tesseract, the 3-sphere and the 5-cube (``scenes/tesseract.toml``,
 ``sphere3.toml``, ``penteract.toml``) at the default draft resolution (about 32³ = 32768 retina
-cells: 32³ in 4D, 14⁴ in 5D) and the default picture (512×512, drafts composited at 256×256).
+cells: 32³ in 4D, 14⁴ in 5D) and the default picture (512×512, drafts composited at 192×192).
 
 Usage:  python bench/viewer.py [--frames 60] [--threads 2] [--draft-cells 32768] [--size 512]
 """
@@ -98,17 +98,19 @@ def main() -> None:
     ap.add_argument("--warmup", type=int, default=5)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--draft-cells", type=int, default=DRAFT_CELLS)
-    ap.add_argument("--size", type=int, default=512, help="picture side (drafts composite at half)")
+    ap.add_argument("--size", type=int, default=512, help="picture side")
+    ap.add_argument("--draft-scale", type=float, default=None, help="draft picture / picture (default: the viewer's)")
     ap.add_argument("--scenes", nargs="*", default=["tesseract", "sphere3", "penteract"])
     a = ap.parse_args()
     print(f"drag loop of ndtrace view: {a.frames} frames per scene, {a.threads} threads, "
-          f"draft ≈ {a.draft_cells} retina cells, picture {a.size}² (drafts at half size)")
+          f"draft ≈ {a.draft_cells} retina cells, picture {a.size}²")
     print(f"{'scene':<11} {'retina':>11} {'frames/s':>9} {'loop ms':>8} {'CPU ms':>7} {'server':>7} "
           f"{'build':>6} {'trace':>6} {'comp.':>6} {'encode':>6}")
     for name in a.scenes:
         scene = ndtrace.load_file(SCENES / f"{name}.toml")
+        extra = {} if a.draft_scale is None else {"draft_scale": a.draft_scale}
         r = asyncio.run(drag_loop(scene, f"{name}.toml", a.frames, a.warmup, threads=a.threads,
-                                  draft_cells=a.draft_cells, size=(a.size, a.size)))
+                                  draft_cells=a.draft_cells, size=(a.size, a.size), **extra))
         print(f"{name:<11} {'×'.join(map(str, r['retina'])):>11} {r['fps']:9.1f} {r['loop_ms']:8.1f} "
               f"{r['cpu_ms']:7.1f} {r['server_ms']:7.1f} {r['build_ms']:6.1f} {r['trace_ms']:6.1f} {r['composite_ms']:6.1f} "
               f"{r['encode_ms']:6.1f}")

@@ -292,7 +292,7 @@ def test_frames_show_the_rotated_scene(n):
     np.testing.assert_array_equal(got, want)
     meta, payload = s.render(s.snapshot(), DRAFT, lambda: False)
     assert meta["quality"] == DRAFT
-    assert decode(meta, payload).shape[:2] == (40, 48)  # drafts composite at half the size
+    assert decode(meta, payload).shape[:2] == (30, 36)  # drafts composite at 3/8 of the size
     # The full retina of this rotation is kept: the draft composited it without a trace.
     assert "trace" not in meta["timings"] and meta["retina"] == list(retina.shape)
     s.handle({"type": "roll", "steps": [[1, 0]]})

@@ -31,10 +31,14 @@ from . import controls
 from .worker import DRAFT, FULL, Superseded
 
 __all__ = ["ViewSession", "Snapshot", "composite_modes", "display_aids", "BASE_KEYWORDS",
-           "DRAFT_CELLS"]
+           "DRAFT_CELLS", "DRAFT_SCALE", "DRAFT_STEP"]
 
 #: Retina cells of a draft frame (traced while the mouse moves): 32³ for a 4D scene.
 DRAFT_CELLS: int = 32 ** 3
+
+#: The draft picture's size over the full picture's: 192×192 for 512×512, drawn scaled up while
+#: the mouse moves (the composite's cost goes with its pixels: this is most of a draft's time).
+DRAFT_SCALE: float = 0.375
 
 #: The volume marching step (in cells) of a draft frame at least: one sample per cell.
 DRAFT_STEP: float = 1.0
@@ -133,7 +137,7 @@ class ViewSession:
     """
 
     def __init__(self, scene: Scene, *, size: tuple[int, int] | None = None,
-                 draft_cells: int = DRAFT_CELLS, draft_scale: float = 0.5,
+                 draft_cells: int = DRAFT_CELLS, draft_scale: float = DRAFT_SCALE,
                  threads: int | None = None, name: str | None = None) -> None:
         if not isinstance(scene, Scene):
             raise TypeError(f"scene: expected an ndtrace.Scene, got {type(scene).__name__}")
