@@ -48,14 +48,13 @@ mod volume;
 
 pub use montage::{slice_layout, Layout, SEPARATOR};
 pub use options::{
-    CompositeMode, CompositeOptions, Projection, DEFAULT_DISTANCE, DEFAULT_STAGE_DISTANCE,
-    MAX_PIXELS,
+    CompositeMode, CompositeOptions, GivenKeys, OptionError, Projection, DEFAULT_DISTANCE,
+    DEFAULT_STAGE_DISTANCE, MAX_PIXELS,
 };
 
-use crate::NdResult;
+use crate::{NdError, NdResult};
 use glam::Vec4;
 use montage::{render_slices, render_strip, render_tiles, Tiles};
-use options::validate;
 use rayon::prelude::*;
 use stages::{project_stage, stage_params};
 use volume::{render_3d, Grid};
@@ -100,7 +99,8 @@ pub fn composite(
     shape: &[usize],
     opts: &CompositeOptions,
 ) -> NdResult<Image> {
-    let cells = validate(rgba, depth, shape, opts)?;
+    let cells = check_retina(rgba, depth, shape)?;
+    opts.validate_for(shape, depth.is_some())?;
     let mut vol = Volume {
         shape: shape.to_vec(),
         cells: prepare(rgba, depth, cells, opts),
@@ -141,8 +141,55 @@ pub fn composite(
 }
 
 // ---------------------------------------------------------------------------------------------
-// Preparation and front-to-back accumulation
+// The input, its preparation and front-to-back accumulation
 // ---------------------------------------------------------------------------------------------
+
+fn shape_err(message: String) -> NdError {
+    NdError::Value {
+        arg: "shape".into(),
+        message,
+    }
+}
+
+/// Checks the retina's shape and the lengths of its arrays; returns the number of cells.
+fn check_retina(rgba: &[f32], depth: Option<&[f32]>, shape: &[usize]) -> NdResult<usize> {
+    let m = shape.len();
+    if !(1..=7).contains(&m) {
+        return Err(shape_err(format!(
+            "a retina has 1 to 7 axes (scene dimension N = 2..=8), got {m} axes {shape:?}"
+        )));
+    }
+    if let Some(k) = shape.iter().position(|&r| r == 0) {
+        return Err(shape_err(format!("axis {k} has no cells: {shape:?}")));
+    }
+    let cells = shape
+        .iter()
+        .try_fold(1usize, |a, &r| a.checked_mul(r))
+        .filter(|&c| c <= isize::MAX as usize / 16)
+        .ok_or_else(|| shape_err(format!("too many cells: {shape:?}")))?;
+    let dims = shape
+        .iter()
+        .map(|r| r.to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    if rgba.len() != cells * 4 {
+        return Err(NdError::Shape {
+            arg: "rgba".into(),
+            expected: format!("({dims}, 4) = {} floats", cells * 4),
+            got: format!("{} floats", rgba.len()),
+        });
+    }
+    if let Some(d) = depth {
+        if d.len() != cells {
+            return Err(NdError::Shape {
+                arg: "depth".into(),
+                expected: format!("({dims}) = {cells} floats"),
+                got: format!("{} floats", d.len()),
+            });
+        }
+    }
+    Ok(cells)
+}
 
 /// A working copy of the retina as one `[f32; 4]` per cell: alpha scaled by the opacity
 /// (colour with it) and clamped to [0, 1], and the depth cue applied.
