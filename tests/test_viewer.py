@@ -203,6 +203,44 @@ def test_a_second_ctrl_c_still_ends_it_quietly():
     assert "Traceback" not in err and err.rstrip().endswith("stopped")
 
 
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_port_and_opening_the_browser(tmp_path):
+    """``--port N`` serves on N; without ``--no-browser`` the printed URL (the first stdout line)
+    is opened in the user's browser (``$BROWSER``, as Python's webbrowser reads it; a stand-in
+    script here), with ``--no-browser`` nothing is opened."""
+    opened = tmp_path / "opened.txt"
+    fake = tmp_path / "browser"
+    fake.write_text(f'#!/bin/sh\necho "$1" >> {opened}\n')
+    fake.chmod(0o755)
+    env = dict(os.environ, PYTHONUNBUFFERED="1", BROWSER=str(fake), DISPLAY=os.environ.get("DISPLAY") or ":0")
+
+    def run(*extra: str) -> str:
+        port = free_port()
+        proc = subprocess.Popen([*ndtrace_command(), "view", "scenes/cube.toml", "--port", str(port), *extra],
+                                cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        url = proc.stdout.readline().strip()
+        try:
+            assert URL.match(url) and URL.match(url).group(1) == str(port), url
+            assert status(url) == 200
+            end = time.monotonic() + (0.5 if extra else 15)  # --no-browser: it would have started by now
+            while not (opened.exists() and opened.read_text().endswith("\n")) and time.monotonic() < end:
+                time.sleep(0.05)
+        finally:
+            code, err = stop_server(proc)
+        assert code == 0, err
+        return url
+
+    url = run()
+    assert opened.read_text() == url + "\n"
+    run("--no-browser")
+    assert opened.read_text() == url + "\n"  # opened once, by the first server only
+
+
 # -- the page in headless Chromium ---------------------------------------------------------------
 
 def browser():
@@ -356,6 +394,23 @@ def test_keys_and_buttons(page):
     page.execute_script("const s = document.querySelector('.ndv-mode'); s.value = 'mip'; s.dispatchEvent(new Event('change'))")
     chosen = settled(page, snapped["frames"])
     assert chosen["options"]["mode"] == "mip"
+    canvas = page.find_element("css selector", "canvas")
+    canvas.send_keys("m")  # the next mode of the list (after the last: the default again)
+    stepped = settled(page, chosen["frames"])
+    following = modes[(modes.index("mip") + 1) % len(modes)]
+    assert stepped["options"].get("mode") == (following or None)
+    opacity = stepped["options"].get("opacity", 1.0)
+    canvas.send_keys("]")  # opacity × 1.25, 3 digits
+    brighter = settled(page, stepped["frames"])
+    assert brighter["options"]["opacity"] == pytest.approx(min(2.0, opacity * 1.25), rel=1e-3)
+    canvas.send_keys("[")
+    dimmer = settled(page, brighter["frames"])
+    assert dimmer["options"]["opacity"] == pytest.approx(brighter["options"]["opacity"] / 1.25, rel=1e-3)
+    page.execute_script("const o = document.querySelector('.ndv-opacity'); o.value = 500; o.dispatchEvent(new Event('input'))")
+    slid = settled(page, dimmer["frames"])  # the slider is logarithmic: 0.01 … 2, half way √(0.01·2)
+    assert slid["options"]["opacity"] == pytest.approx(0.141)
+    page.execute_script("const s = document.querySelector('.ndv-mode'); s.value = 'mip'; s.dispatchEvent(new Event('change'))")
+    chosen = settled(page, slid["frames"])
     page.execute_script("[...document.querySelectorAll('.ndv-btn')].find(b => b.textContent.startsWith('Reset')).click()")
     reset = settled(page, chosen["frames"])
     assert reset["rotation"] == np.eye(4).tolist() and "mode" not in reset["options"]

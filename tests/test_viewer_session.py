@@ -310,12 +310,12 @@ def test_the_view_as_toml_renders_what_the_page_shows():
     text = s.view_toml()
     assert text.startswith("# The view of tesseract.toml")
     table, refused = s.composite_table()
-    assert "zoom" in table or refused == {"zoom": 2.0}  # a [composite] key once the format has it
-    assert ("zoom = 2.0" in text.split("\n[")[0]) == ("zoom" in refused)
+    assert refused == {} and table["zoom"] == 2.0  # [composite] holds every keyword of composite
+    assert "does not take" not in text.split("\n[")[0]
     loaded = ndtrace.load_toml(text)
     table = loaded.to_dict()["composite"]
     assert table["mode"] == "mip" and table["opacity"] == 0.5 and table["azimuth"] == pytest.approx(38)
-    s.handle({"type": "zoom", "factor": 0.5})  # back to 1: what the file can say today
+    assert table["zoom"] == 2.0 and table["size"] == (64, 64)
     meta, payload = s.render(s.snapshot(), FULL, lambda: False)
     from ndtrace.composite import scene_options
 
