@@ -92,7 +92,7 @@ def load_error(tmp_path, file="bad.npz", **arrays) -> str:
     with pytest.raises(ValueError) as e:
         ndtrace.load_file(tmp_path / "scene.toml")
     message = str(e.value)
-    prefix = f"scene.toml:17:8: objects[0].file: {tmp_path / file}"
+    prefix = f"{tmp_path / 'scene.toml'}:15:8: objects[0].file: {tmp_path / file}"
     assert message.startswith(prefix), message
     return message[len(prefix):]
 
@@ -103,7 +103,7 @@ def test_arrays_that_cannot_be_a_mesh_are_errors_naming_file_and_array(tmp_path)
         ': array "vertices": expected a 2-D array, got a 1-D array of shape (64,) (dtype '
         "'<f8'); save it with shape (rows, columns), e.g. a.reshape(-1, dim)")
     e = load_error(tmp_path, vertices=v, simplices=s[None])
-    assert e.startswith(': array "simplices": expected a 2-D array, got a 3-D array of shape (1, 48, 4)'), e
+    assert e.startswith(f': array "simplices": expected a 2-D array, got a 3-D array of shape (1, {len(s)}, 4)'), e
     e = load_error(tmp_path, vertices=v.astype(np.complex128), simplices=s)
     assert e == ': array "vertices": unsupported dtype \'<c16\' (use a float, integer or bool type such as float64 or int64)', e
     e = load_error(tmp_path, vertices=v.astype("U3"), simplices=s)
@@ -115,10 +115,12 @@ def test_arrays_that_cannot_be_a_mesh_are_errors_naming_file_and_array(tmp_path)
     e = load_error(tmp_path, vertices=v[:, :3], simplices=s)
     assert e == ': array "vertices" has shape (16, 3), expected (V, 4) for a scene of dimension 4', e
     e = load_error(tmp_path, vertices=v, simplices=s[:, :3])
-    assert e == ': array "simplices" has shape (48, 3), expected (S, 4) for a scene of dimension 4', e
+    assert e == f': array "simplices" has shape ({len(s)}, 3), expected (S, 4) for a scene of dimension 4', e
     assert load_error(tmp_path, vertices=v) == ' has no array named "simplices"'
-    e = load_error(tmp_path, vertices=v, simplices=s + 16)
-    assert re.fullmatch(r":vertices: vertex index 16 out of range: the mesh has 16 vertices|.*out of range.*", e), e
+    np.savez(tmp_path / "bad.npz", vertices=v, simplices=s + 16)
+    with pytest.raises(ValueError, match=r"scene\.toml:\d+:\d+: objects\[0\]\.file:simplices\[0\]\[0\]: "
+                       r"vertex index \d+ out of range: the mesh has 16 vertices"):
+        ndtrace.load_file(tmp_path / "scene.toml")
 
 
 def test_broken_files_are_errors_not_crashes(tmp_path):

@@ -433,7 +433,7 @@ mod tests {
         let mut bad = b"\x93NUMPY\x01\x00".to_vec();
         bad.extend((deep.len() as u16).to_le_bytes());
         bad.extend(deep.as_bytes());
-        assert!(parse_npy(&bad).unwrap_err().contains("nests 2000 brackets"));
+        assert!(parse_npy(&bad).unwrap_err().contains("nests 2001 brackets"));
         for header in [
             "{",
             "{'descr': '<f8'}",
