@@ -3,6 +3,8 @@
 
 use super::desc::*;
 use super::errors::PathError;
+pub use super::fields::Rgb;
+use super::fields::{coefficient, finite_list, matrix_rows, rgb, vec_n, R};
 use super::npz::read_npz;
 use crate::accel::{Bvh, PreparedSimplex};
 use crate::camera::{look_at_orientation, Camera};
@@ -25,15 +27,12 @@ pub const fn retina_bytes_per_cell(n: usize) -> usize {
     16 + 4 + 4 * n + 4 + 8
 }
 
-/// An RGB triple.
-pub type Rgb = [f64; 3];
-
 /// Surface appearance with every coefficient resolved to RGB.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Material {
     /// Base colour.
     pub color: Rgb,
-    /// Ambient, diffuse and specular coefficients.
+    /// Ambient coefficient.
     pub ambient: Rgb,
     /// Diffuse coefficient.
     pub diffuse: Rgb,
@@ -122,8 +121,6 @@ impl<const N: usize> Scene<N> {
     }
 }
 
-type R<T> = Result<T, PathError>;
-
 /// Global id, prepared simplex (None when degenerate), unit normal and bounds of a simplex.
 type PrimRecord<const N: usize> = (
     u32,
@@ -131,67 +128,6 @@ type PrimRecord<const N: usize> = (
     Vector<N>,
     ([f64; N], [f64; N]),
 );
-
-fn finite_list(v: &[f64], path: &str) -> R<()> {
-    match v.iter().position(|x| !x.is_finite()) {
-        Some(i) => Err(PathError::new(
-            format!("{path}[{i}]"),
-            format!("non-finite value {}", v[i]),
-        )),
-        None => Ok(()),
-    }
-}
-
-/// A vector of exactly N finite numbers.
-pub(crate) fn vec_n<const N: usize>(v: &[f64], path: &str) -> R<Vector<N>> {
-    if v.len() != N {
-        return Err(PathError::new(
-            path,
-            format!("expected {N} numbers (dim = {N}), got {}", v.len()),
-        ));
-    }
-    finite_list(v, path)?;
-    Ok(std::array::from_fn(|i| v[i]))
-}
-
-/// An RGB triple of finite, non-negative numbers.
-fn rgb(v: &[f64], path: &str) -> R<Rgb> {
-    if v.len() != 3 {
-        return Err(PathError::new(
-            path,
-            format!("expected 3 numbers, got {}", v.len()),
-        ));
-    }
-    finite_list(v, path)?;
-    if let Some(i) = v.iter().position(|&x| x < 0.0) {
-        return Err(PathError::new(
-            format!("{path}[{i}]"),
-            format!("must be ≥ 0, got {}", v[i]),
-        ));
-    }
-    Ok([v[0], v[1], v[2]])
-}
-
-fn coefficient(c: &Coefficient, path: &str) -> R<Rgb> {
-    match c {
-        Coefficient::Scalar(s) => rgb(&[*s; 3], path),
-        Coefficient::Rgb(v) => rgb(v, path),
-    }
-}
-
-pub(crate) fn matrix_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<Matrix<N>> {
-    if rows.len() != N {
-        return Err(PathError::new(
-            path,
-            format!("expected {N} rows of {N} numbers, got {} rows", rows.len()),
-        ));
-    }
-    let mut m = [[0.0; N]; N];
-    for (i, row) in rows.iter().enumerate() {
-        m[i] = vec_n::<N>(row, &format!("{path}[{i}]"))?;
-    }
-    Ok(m)
-}
 
 fn camera<const N: usize>(c: &CameraDesc, samples: u32) -> R<Camera<N>> {
     let position = vec_n::<N>(&c.position, "camera.position")?;

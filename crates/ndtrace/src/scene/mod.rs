@@ -5,6 +5,7 @@ pub mod animation;
 pub mod build;
 pub mod desc;
 pub mod errors;
+mod fields;
 pub mod npz;
 
 pub use build::{Light, Material, Object, Scene};

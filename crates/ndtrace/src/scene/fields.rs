@@ -1,0 +1,77 @@
+//! The small parsers every part of the scene build uses: a field of the description checked
+//! and converted to its typed value, or a [`PathError`] naming the field (`objects[2].material
+//! .color[1]: must be ≥ 0, got -1`).
+
+use super::desc::Coefficient;
+use super::errors::PathError;
+use crate::linalg::{Matrix, Vector};
+
+/// A field's value or the located error.
+pub(crate) type R<T> = Result<T, PathError>;
+
+/// An RGB triple.
+pub type Rgb = [f64; 3];
+
+/// Every number of `v` is finite; else the error names the first that is not (`path[i]`).
+pub(crate) fn finite_list(v: &[f64], path: &str) -> R<()> {
+    match v.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(PathError::new(
+            format!("{path}[{i}]"),
+            format!("non-finite value {}", v[i]),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// A vector of exactly N finite numbers.
+pub(crate) fn vec_n<const N: usize>(v: &[f64], path: &str) -> R<Vector<N>> {
+    if v.len() != N {
+        return Err(PathError::new(
+            path,
+            format!("expected {N} numbers (dim = {N}), got {}", v.len()),
+        ));
+    }
+    finite_list(v, path)?;
+    Ok(std::array::from_fn(|i| v[i]))
+}
+
+/// An RGB triple of finite, non-negative numbers.
+pub(crate) fn rgb(v: &[f64], path: &str) -> R<Rgb> {
+    if v.len() != 3 {
+        return Err(PathError::new(
+            path,
+            format!("expected 3 numbers, got {}", v.len()),
+        ));
+    }
+    finite_list(v, path)?;
+    if let Some(i) = v.iter().position(|&x| x < 0.0) {
+        return Err(PathError::new(
+            format!("{path}[{i}]"),
+            format!("must be ≥ 0, got {}", v[i]),
+        ));
+    }
+    Ok([v[0], v[1], v[2]])
+}
+
+/// A reflection coefficient, one number for R, G and B or one per channel, as RGB.
+pub(crate) fn coefficient(c: &Coefficient, path: &str) -> R<Rgb> {
+    match c {
+        Coefficient::Scalar(s) => rgb(&[*s; 3], path),
+        Coefficient::Rgb(v) => rgb(v, path),
+    }
+}
+
+/// An N×N matrix given as N rows of N finite numbers.
+pub(crate) fn matrix_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<Matrix<N>> {
+    if rows.len() != N {
+        return Err(PathError::new(
+            path,
+            format!("expected {N} rows of {N} numbers, got {} rows", rows.len()),
+        ));
+    }
+    let mut m = [[0.0; N]; N];
+    for (i, row) in rows.iter().enumerate() {
+        m[i] = vec_n::<N>(row, &format!("{path}[{i}]"))?;
+    }
+    Ok(m)
+}
