@@ -27,7 +27,6 @@ pub mod composite;
 pub mod convex;
 pub mod dim;
 pub mod error;
-pub mod exact;
 pub mod files;
 pub mod geometry;
 pub mod linalg;
