@@ -7,6 +7,7 @@ pub mod desc;
 pub mod errors;
 mod fields;
 pub mod npz;
+mod transform;
 
 pub use build::{Light, Material, Object, Scene};
 pub use desc::SceneDesc;
