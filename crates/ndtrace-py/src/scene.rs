@@ -2,7 +2,7 @@
 //! class (a validated description plus its built, traceable scene and BVH).
 
 use crate::errors::to_py_err;
-use ndtrace::pool;
+use ndtrace::render::pool;
 use ndtrace::render::{self, Progress, Retina};
 use ndtrace::scene::{self, AnyScene, SceneDesc};
 use ndtrace::{with_scene, NdError};

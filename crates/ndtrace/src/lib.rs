@@ -31,7 +31,6 @@ pub mod files;
 pub mod geometry;
 pub mod linalg;
 pub mod mesh;
-pub mod pool;
 pub mod render;
 pub mod rotation;
 pub mod scene;
