@@ -8,10 +8,11 @@ from . import _ndtrace
 from . import geometry
 from . import rotation
 from . import frames
+from . import mesh
 from .retina import Retina, trace
 from ._ndtrace import release_buffers
 from .composite import composite
-from .files import read_exr, write_exr, write_png
+from .files import read_exr, write_exr, write_image, write_png
 from .scene import Scene, load_dict, load_file, load_toml
 from . import animation
 from .animation import animate
@@ -21,6 +22,6 @@ MIN_DIM: int = _ndtrace.MIN_DIM
 MAX_DIM: int = _ndtrace.MAX_DIM
 
 __all__ = [
-    "geometry", "rotation", "frames", "Scene", "Retina", "trace", "release_buffers", "composite", "read_exr", "write_exr", "write_png", "load_file", "load_dict", "load_toml", "animation", "animate",
+    "geometry", "rotation", "frames", "mesh", "Scene", "Retina", "trace", "release_buffers", "composite", "read_exr", "write_exr", "write_image", "write_png", "load_file", "load_dict", "load_toml", "animation", "animate",
     "MIN_DIM", "MAX_DIM", "__version__",
 ]

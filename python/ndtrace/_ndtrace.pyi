@@ -88,9 +88,23 @@ class CompiledScene:
         self, threads: int | None = None, callback: Callable[[int, int], object] | None = None
     ) -> dict[str, object]: ...
 
-def load_file(path: str) -> CompiledScene: ...
-def load_toml(text: str, name: str = "<string>", base: str | None = None) -> CompiledScene: ...
-def load_dict(data: object, name: str = "<dict>", base: str | None = None) -> CompiledScene: ...
+_MeshReader = Callable[[str, int], tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]]
+
+def load_file(path: str, reader: _MeshReader | None = None) -> CompiledScene: ...
+def load_toml(
+    text: str, name: str = "<string>", base: str | None = None, reader: _MeshReader | None = None
+) -> CompiledScene: ...
+def load_dict(
+    data: object, name: str = "<dict>", base: str | None = None, reader: _MeshReader | None = None
+) -> CompiledScene: ...
+
+# -- meshes ---------------------------------------------------------------------------
+
+def orient_flips(
+    vertices: npt.NDArray[np.float64], simplices: npt.NDArray[np.uint32]
+) -> npt.NDArray[np.bool_]: ...
+
+RENDER_MODES: tuple[str, ...]
 
 # -- files ----------------------------------------------------------------------------
 
@@ -108,30 +122,19 @@ def write_retina_exr(
 def write_picture_exr(
     path: str, rgba: npt.NDArray[np.float32], depth: npt.NDArray[np.float32] | None = None
 ) -> None: ...
-def write_png(path: str, rgba: npt.NDArray[np.float32]) -> None: ...
 def to_srgb8(rgba: npt.NDArray[np.float32], opaque: bool = False) -> npt.NDArray[np.uint8]: ...
 def read_exr(path: str) -> dict[str, object]: ...
 
 # -- compositing ----------------------------------------------------------------------
 
+COMPOSITE_MODES: tuple[str, ...]
+PROJECTIONS: tuple[str, ...]
+
 def composite(
     rgba: npt.NDArray[np.float32],
     depth: npt.NDArray[np.float32] | None = None,
-    *,
-    mode: str = "volume",
-    azimuth: float = 30.0,
-    elevation: float = 20.0,
-    distance: float = ...,
-    zoom: float = 1.0,
-    projection: str = "perspective",
-    size: tuple[int, int] = (512, 512),
-    opacity: float = 1.0,
-    step: float = 0.5,
-    depth_cue: float = 0.0,
-    axis: int = 0,
-    background: tuple[float, float, float] = (0.0, 0.0, 0.0),
-    stages: list[tuple[float, float]] | None = None,
-    strip_height: int = 32,
-    labels: bool = True,
+    options: dict[str, object] | None = None,
     threads: int | None = None,
 ) -> npt.NDArray[np.float32]: ...
+def composite_defaults() -> dict[str, object]: ...
+def check_composite(options: dict[str, object], name: str) -> None: ...

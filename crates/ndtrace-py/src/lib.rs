@@ -10,6 +10,7 @@ mod composite;
 mod errors;
 mod files;
 mod geometry;
+mod mesh;
 mod rotation;
 mod scene;
 
@@ -43,5 +44,6 @@ fn _ndtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     scene::register(m)?;
     composite::register(m)?;
     files::register(m)?;
+    mesh::register(m)?;
     Ok(())
 }

@@ -31,6 +31,8 @@ pub mod files;
 pub mod geometry;
 pub mod linalg;
 pub mod mesh;
+pub mod names;
+pub mod ray;
 pub mod render;
 pub mod rotation;
 pub mod scene;

@@ -16,8 +16,8 @@ use super::shade::{
     blinn_phong, id_color, light_term, shading_normal, shadow_ray, toward_light, SHADOW_OFFSET,
 };
 use super::NearestHit;
-use crate::accel::{Hit, Ray};
 use crate::linalg::{add_scaled, dot, norm, scale, Vector};
+use crate::ray::{Hit, Ray};
 use crate::scene::desc::RenderMode;
 use crate::scene::Scene;
 use std::ops::Range;

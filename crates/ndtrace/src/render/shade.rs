@@ -7,8 +7,9 @@
 //! of every sum, so that each of its rays gets [`shade_hit`]'s bits (tested cell by cell).
 
 use super::sampling::SplitMix;
-use crate::accel::{Hit, Ray, BOX_PAD};
+use crate::accel::BOX_PAD;
 use crate::linalg::{add, add_scaled, dot, norm, scale, sub, Vector};
+use crate::ray::{Hit, Ray};
 use crate::scene::build::Rgb;
 use crate::scene::{Light, Scene};
 
