@@ -4,7 +4,7 @@
 use super::desc::*;
 use super::errors::PathError;
 pub use super::fields::Rgb;
-use super::fields::{coefficient, matrix_rows, rgb, vec_n, R};
+use super::fields::{coefficient, matrix_rows, mesh_from_rows, rgb, vec_n, R};
 use super::mesh_file::{orientation_warning, read_mesh, MeshReader};
 use super::transform::transform;
 use crate::accel::{Bvh, PreparedSimplex};
@@ -325,45 +325,6 @@ fn human_bytes(b: f64) -> String {
     } else {
         format!("{v:.1} {}", units[u])
     }
-}
-
-pub(super) fn mesh_from_rows<const N: usize>(
-    vertices: &[f64],
-    nv: usize,
-    simplices: &[f64],
-    ns: usize,
-    path: &str,
-    vpath: &str,
-    spath: &str,
-) -> R<Mesh<N>> {
-    if let Some(i) = vertices.iter().position(|x| !x.is_finite()) {
-        return Err(PathError::new(
-            format!("{vpath}[{}][{}]", i / N, i % N),
-            format!("non-finite coordinate {}", vertices[i]),
-        ));
-    }
-    let mut mesh = Mesh {
-        vertices: Vec::with_capacity(nv),
-        simplices: Vec::with_capacity(ns),
-    };
-    for v in vertices.chunks_exact(N) {
-        mesh.vertices.push(std::array::from_fn(|i| v[i]));
-    }
-    for (s, row) in simplices.chunks_exact(N).enumerate() {
-        let mut idx = [0u32; N];
-        for (k, &x) in row.iter().enumerate() {
-            if !(x >= 0.0 && x < nv as f64 && x.fract() == 0.0) {
-                return Err(PathError::new(
-                    format!("{spath}[{s}][{k}]"),
-                    format!("vertex index {x} out of range: the mesh has {nv} vertices"),
-                ));
-            }
-            idx[k] = x as u32;
-        }
-        mesh.simplices.push(idx);
-    }
-    let _ = path;
-    Ok(mesh)
 }
 
 fn object_mesh<const N: usize>(

@@ -5,6 +5,7 @@
 use super::desc::Coefficient;
 use super::errors::PathError;
 use crate::linalg::{Matrix, Vector};
+use crate::mesh::Mesh;
 
 /// A field's value or the located error.
 pub(crate) type R<T> = Result<T, PathError>;
@@ -74,4 +75,46 @@ pub(crate) fn matrix_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<Ma
         m[i] = vec_n::<N>(row, &format!("{path}[{i}]"))?;
     }
     Ok(m)
+}
+
+/// A mesh from flat row-major arrays: `nv` vertices of N finite coordinates and `ns` simplices
+/// of N vertex indices (whole numbers below `nv`, given as floats); errors name the element
+/// (`vpath[i][k]`, `spath[s][k]`). `path` is the object's field path.
+pub(crate) fn mesh_from_rows<const N: usize>(
+    vertices: &[f64],
+    nv: usize,
+    simplices: &[f64],
+    ns: usize,
+    path: &str,
+    vpath: &str,
+    spath: &str,
+) -> R<Mesh<N>> {
+    if let Some(i) = vertices.iter().position(|x| !x.is_finite()) {
+        return Err(PathError::new(
+            format!("{vpath}[{}][{}]", i / N, i % N),
+            format!("non-finite coordinate {}", vertices[i]),
+        ));
+    }
+    let mut mesh = Mesh {
+        vertices: Vec::with_capacity(nv),
+        simplices: Vec::with_capacity(ns),
+    };
+    for v in vertices.chunks_exact(N) {
+        mesh.vertices.push(std::array::from_fn(|i| v[i]));
+    }
+    for (s, row) in simplices.chunks_exact(N).enumerate() {
+        let mut idx = [0u32; N];
+        for (k, &x) in row.iter().enumerate() {
+            if !(x >= 0.0 && x < nv as f64 && x.fract() == 0.0) {
+                return Err(PathError::new(
+                    format!("{spath}[{s}][{k}]"),
+                    format!("vertex index {x} out of range: the mesh has {nv} vertices"),
+                ));
+            }
+            idx[k] = x as u32;
+        }
+        mesh.simplices.push(idx);
+    }
+    let _ = path;
+    Ok(mesh)
 }
