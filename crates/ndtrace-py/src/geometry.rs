@@ -2,7 +2,7 @@
 //! in, a flat float64 array out (reshaped by the Python wrapper).
 
 use crate::buffers::{flat, run, Arr, Out};
-use ndtrace::batch::{self, OnDegenerate};
+use ndtrace::batch::geometry::{self as batch, OnDegenerate};
 use pyo3::prelude::*;
 
 fn on_degenerate(raise: bool) -> OnDegenerate {

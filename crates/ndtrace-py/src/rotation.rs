@@ -1,10 +1,11 @@
 //! Kernels behind `ndtrace.rotation`: flat C-contiguous float64 buffers (plus `dim` and the
 //! sizes the core cannot infer) in, a flat float64 array out (reshaped by the Python wrapper).
-//! Every check lives in the core's `ndtrace::rotation::batch`.
+//! Every check lives in the core's `ndtrace::batch::rotation`.
 
 use crate::buffers::{flat, run, Arr, Out};
 use crate::errors::to_py_err;
-use ndtrace::rotation::{batch, RollingAngle};
+use ndtrace::batch::rotation as batch;
+use ndtrace::rotation::RollingAngle;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 

@@ -3,7 +3,7 @@
 
 use crate::errors::to_py_err;
 use crate::mesh::PyMeshReader;
-use ndtrace::pool;
+use ndtrace::render::pool;
 use ndtrace::render::{self, Progress, Retina};
 use ndtrace::scene::desc::RenderMode;
 use ndtrace::scene::{self, AnyScene, MeshReader, SceneDesc};

@@ -17,7 +17,18 @@
 use crate::geometry::generalized_cross;
 use crate::linalg::{add_scaled, dot, norm, scale, sub, Matrix, Vector};
 use crate::ray::Ray;
-use crate::scene::desc::Projection;
+use serde::{Deserialize, Serialize};
+
+/// Perspective (pinhole) or orthographic projection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Projection {
+    /// Rays from the camera position through the retina; `fov` sets the cell size.
+    #[default]
+    Perspective,
+    /// Parallel rays along the view direction; `extent` sets the cell size.
+    Orthographic,
+}
 
 /// A camera ready to generate rays.
 #[derive(Debug, Clone, PartialEq)]

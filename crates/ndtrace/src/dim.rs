@@ -1,13 +1,61 @@
 //! The one place where a runtime dimension becomes a compile-time one.
 //!
 //! Everything numeric in ndtrace is generic over `const N: usize`; code that starts from a
-//! runtime `dim` (a scene file, a numpy array) goes through [`with_dim!`], which is the only
-//! `match` from `usize` to `N` in the code base.
+//! runtime `dim` (a scene file, a numpy array) goes through [`with_dim!`] (or, for a built
+//! scene, [`crate::with_scene!`] on a [`crate::scene::AnyScene`]).
+//!
+//! The supported dimensions are written once, in [`supported_dims!`]: the `match` arms of
+//! [`with_dim!`] and [`crate::with_scene!`], the variants of [`crate::scene::AnyScene`] and
+//! [`SUPPORTED_DIMS`] (so [`MIN_DIM`] and [`MAX_DIM`]) are all generated from that list.
 
+/// Calls the macro `$then` with the supported dimensions: `supported_dims!(($then) ARGS)`
+/// expands to `$then! { ARGS ; 2 D2, 3 D3, …, 8 D8 }`, each N with the name of its
+/// [`crate::scene::AnyScene`] variant. This list is the only place the dimensions are written:
+/// extending it extends every dispatch generated from it.
+///
+/// `$then` is a path in parentheses (`($crate::some_macro)` from inside an exported macro).
+///
+/// ```
+/// macro_rules! count {
+///     ($what:literal ; $($n:literal $variant:ident),*) => {
+///         ($what, [$($n),*].len())
+///     };
+/// }
+/// assert_eq!(ndtrace::supported_dims!((count) "dimensions"), ("dimensions", 7));
+/// ```
+#[macro_export]
+macro_rules! supported_dims {
+    (($($then:tt)+) $($args:tt)*) => {
+        $($then)+! { $($args)* ; 2 D2, 3 D3, 4 D4, 5 D5, 6 D6, 7 D7, 8 D8 }
+    };
+}
+
+/// The list of [`supported_dims!`] as an array expression.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __dims_array {
+    (; $($n:literal $variant:ident),*) => {
+        [$($n),*]
+    };
+}
+
+/// The supported dimensions N, in increasing order (from [`supported_dims!`]).
+pub const SUPPORTED_DIMS: &[usize] = &crate::supported_dims!((crate::__dims_array));
 /// Smallest supported dimension N.
-pub const MIN_DIM: usize = 2;
+pub const MIN_DIM: usize = SUPPORTED_DIMS[0];
 /// Largest supported dimension N.
-pub const MAX_DIM: usize = 8;
+pub const MAX_DIM: usize = SUPPORTED_DIMS[SUPPORTED_DIMS.len() - 1];
+
+// The list is every N in MIN_DIM..=MAX_DIM, in order ([`check_dim`] and the error messages
+// speak of that range; a test checks that `NdError::Dimension` names it).
+const _: () = {
+    let mut k = 0;
+    while k < SUPPORTED_DIMS.len() {
+        assert!(SUPPORTED_DIMS[k] == MIN_DIM + k);
+        k += 1;
+    }
+    assert!(MIN_DIM >= 2);
+};
 
 /// Largest number of points a simplex can have (an N-simplex in R^MAX_DIM has MAX_DIM + 1).
 pub const MAX_POINTS: usize = MAX_DIM + 1;
@@ -23,7 +71,8 @@ pub fn check_dim(dim: usize) -> crate::NdResult<usize> {
 
 /// Runs `$body` with `$N` bound to the compile-time constant equal to the runtime `$dim`.
 ///
-/// Evaluates to `Ok(body)` for `dim` in 2..=8 and to `Err(NdError::Dimension)` otherwise.
+/// Evaluates to `Ok(body)` for `dim` in [`SUPPORTED_DIMS`] (2..=8) and to
+/// `Err(NdError::Dimension)` otherwise.
 ///
 /// ```
 /// use ndtrace::with_dim;
@@ -34,37 +83,24 @@ pub fn check_dim(dim: usize) -> crate::NdResult<usize> {
 /// ```
 #[macro_export]
 macro_rules! with_dim {
-    ($dim:expr, $N:ident => $body:expr) => {{
+    ($dim:expr, $N:ident => $body:expr) => {
+        $crate::supported_dims!(($crate::__with_dim_arms) $dim, $N, $body)
+    };
+}
+
+/// The `match` of [`with_dim!`], one arm per supported dimension.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __with_dim_arms {
+    ($dim:expr, $N:ident, $body:expr ; $($n:literal $variant:ident),*) => {{
         #[allow(clippy::redundant_closure_call)]
         match $dim {
-            2 => {
-                const $N: usize = 2;
-                Ok($body)
-            }
-            3 => {
-                const $N: usize = 3;
-                Ok($body)
-            }
-            4 => {
-                const $N: usize = 4;
-                Ok($body)
-            }
-            5 => {
-                const $N: usize = 5;
-                Ok($body)
-            }
-            6 => {
-                const $N: usize = 6;
-                Ok($body)
-            }
-            7 => {
-                const $N: usize = 7;
-                Ok($body)
-            }
-            8 => {
-                const $N: usize = 8;
-                Ok($body)
-            }
+            $(
+                $n => {
+                    const $N: usize = $n;
+                    Ok($body)
+                }
+            )*
             d => Err($crate::NdError::Dimension { dim: d }),
         }
     }};
@@ -72,24 +108,52 @@ macro_rules! with_dim {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
     use crate::NdError;
 
     #[test]
+    fn the_list_is_two_to_eight() {
+        assert_eq!(SUPPORTED_DIMS, &[2, 3, 4, 5, 6, 7, 8]);
+        assert_eq!((MIN_DIM, MAX_DIM, MAX_POINTS), (2, 8, 9));
+    }
+
+    #[test]
     fn every_supported_dimension_binds_its_constant() {
-        for d in 2..=8usize {
+        for &d in SUPPORTED_DIMS {
             assert_eq!(with_dim!(d, N => N).unwrap(), d);
+            // The constant is a compile-time one: it sizes an array.
+            assert_eq!(with_dim!(d, N => [0u8; N].len()).unwrap(), d);
+            assert_eq!(check_dim(d), Ok(d));
         }
     }
 
     #[test]
     fn dimensions_outside_the_range_are_errors() {
-        for d in [0usize, 1, 9, 100] {
+        for d in [0usize, 1, MIN_DIM - 1, MAX_DIM + 1, 100] {
             match with_dim!(d, N => N) {
                 Err(NdError::Dimension { dim }) => assert_eq!(dim, d),
                 other => panic!("dim {d}: expected a Dimension error, got {other:?}"),
             }
+            assert_eq!(check_dim(d), Err(NdError::Dimension { dim: d }));
         }
-        let msg = super::check_dim(9).unwrap_err().to_string();
-        assert!(msg.contains("2..=8") && msg.contains('9'), "{msg}");
+        // The message (in `error.rs`, which does not depend on this module) names the range.
+        let msg = check_dim(9).unwrap_err().to_string();
+        assert!(
+            msg.contains(&format!("{MIN_DIM}..={MAX_DIM}")) && msg.contains('9'),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn the_body_is_evaluated_once_in_the_matching_arm_only() {
+        let mut calls = vec![];
+        for &d in SUPPORTED_DIMS {
+            with_dim!(d, N => calls.push(N)).unwrap();
+        }
+        assert_eq!(calls, SUPPORTED_DIMS);
+        // `$dim` is evaluated once.
+        let mut evaluated = 0;
+        let r = with_dim!({ evaluated += 1; 4usize }, N => N * 10);
+        assert_eq!((r, evaluated), (Ok(40), 1));
     }
 }

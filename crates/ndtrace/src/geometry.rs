@@ -317,8 +317,8 @@ pub fn transform_normal<const N: usize>(m: &Matrix<N>, normal: &Vector<N>) -> Ve
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::exact::det_bareiss;
     use crate::linalg::{add, det, mat_mul, transpose};
+    use crate::testutil::exact::det_bareiss;
     use crate::testutil::*;
     use rand::Rng;
 

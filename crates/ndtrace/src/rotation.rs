@@ -25,8 +25,6 @@
 //! assert!((m[0][3] - 1f64.sin()).abs() < 1e-15);
 //! ```
 
-pub mod batch;
-
 use crate::camera::look_at_orientation;
 use crate::linalg::{det, dot, identity, mat_mul, norm, scale, transpose, Matrix, Vector};
 use crate::{NdError, NdResult};

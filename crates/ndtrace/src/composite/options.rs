@@ -19,7 +19,7 @@
 //! ```
 
 use super::stages::half_lengths;
-use crate::scene::desc::Projection as SceneProjection;
+use crate::camera::Projection as SceneProjection;
 use crate::NdError;
 use serde::de::{self, DeserializeSeed, MapAccess, Visitor};
 use serde::ser::SerializeStruct;

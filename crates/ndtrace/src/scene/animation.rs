@@ -25,14 +25,13 @@
 
 use super::desc::*;
 use super::errors::PathError;
+use super::fields::{matrix_rows, vec_n, R};
 use crate::linalg::{add, mat_mul, mat_vec, sub, Matrix, Vector};
 use crate::rotation::{
     check_plane, plane_rotation, rolling_ball, scene_quaternion, slerp_so4, so4_from_quaternions,
     Quat,
 };
 use crate::{with_dim, NdError};
-
-type R<T> = Result<T, PathError>;
 
 /// Largest number of frames accepted.
 pub const MAX_FRAMES: u32 = 100_000;
@@ -102,7 +101,7 @@ pub(crate) fn check<const N: usize>(a: &AnimationDesc, objects: usize) -> R<()> 
 fn center<const N: usize>(a: &AnimationDesc) -> R<Vector<N>> {
     match &a.center {
         None => Ok([0.0; N]),
-        Some(c) => super::build::vec_n::<N>(c, "animation.center"),
+        Some(c) => vec_n::<N>(c, "animation.center"),
     }
 }
 
@@ -234,7 +233,7 @@ fn frame_desc_n<const N: usize>(desc: &SceneDesc, a: &AnimationDesc, k: u32) -> 
     check::<N>(a, desc.objects.len())?;
     let m = motion::<N>(a, frame_time(a, k))?;
     let c = center::<N>(a)?;
-    let vec = super::build::vec_n::<N>;
+    let vec = vec_n::<N>;
     let about = |x: &[f64], path: &str| -> R<Vec<f64>> {
         Ok(add(&c, &mat_vec(&m, &sub(&vec(x, path)?, &c))).to_vec())
     };
@@ -271,7 +270,7 @@ fn frame_desc_n<const N: usize>(desc: &SceneDesc, a: &AnimationDesc, k: u32) -> 
                 )),
             };
             if let Some(o) = &cam.orientation {
-                let rows = super::build::matrix_rows::<N>(o, "camera.orientation")?;
+                let rows = matrix_rows::<N>(o, "camera.orientation")?;
                 cam.orientation = Some(mat_mul(&m, &rows).iter().map(|r| r.to_vec()).collect());
             }
         }
@@ -394,8 +393,10 @@ sweep = { plane = [0, 3], degrees = [0, 90] }
             animation: None,
             ..desc.clone()
         };
-        let s = crate::scene::build::build::<4>(&d, None).unwrap();
-        s.camera.orientation
+        match crate::scene::build_desc(&d, "test", None).unwrap() {
+            crate::scene::AnyScene::D4(s) => s.camera.orientation,
+            _ => panic!("a 4D scene"),
+        }
     }
 
     #[test]
@@ -417,11 +418,11 @@ sweep = { plane = [0, 3], degrees = [0, 90] }
         );
         let (desc, _) = load_toml_str(&cam, "spin.toml", None).unwrap();
         let f = frame_desc(&desc, 1).unwrap();
-        let o = crate::scene::build::matrix_rows::<4>(f.camera.orientation.as_ref().unwrap(), "o")
+        let o = crate::scene::fields::matrix_rows::<4>(f.camera.orientation.as_ref().unwrap(), "o")
             .unwrap();
         let m = plane_rotation::<4>(0, 3, 90f64.to_radians());
         let o0 =
-            crate::scene::build::matrix_rows::<4>(desc.camera.orientation.as_ref().unwrap(), "o")
+            crate::scene::fields::matrix_rows::<4>(desc.camera.orientation.as_ref().unwrap(), "o")
                 .unwrap();
         assert!(close(&o, &crate::linalg::mat_mul(&m, &o0), 1e-12));
     }

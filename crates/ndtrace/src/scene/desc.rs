@@ -27,6 +27,9 @@
 
 use serde::{Deserialize, Serialize};
 
+/// The camera's projection, a scene key (`camera.projection`) defined beside the camera.
+pub use crate::camera::Projection;
+
 /// A whole scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -156,17 +159,6 @@ fn default_background() -> Vec<f64> {
 }
 fn default_ambient() -> Vec<f64> {
     vec![0.2, 0.2, 0.2]
-}
-
-/// Perspective (pinhole) or orthographic projection.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Projection {
-    /// Rays from the camera position through the retina; `fov` sets the cell size.
-    #[default]
-    Perspective,
-    /// Parallel rays along the view direction; `extent` sets the cell size.
-    Orthographic,
 }
 
 /// One resolution for every retina axis, or one per axis R_1 … R_{N−1}.

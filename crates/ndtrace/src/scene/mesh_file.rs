@@ -3,6 +3,7 @@
 //! format. Either way the arrays are checked here, and errors name the field and the file.
 
 use super::errors::PathError;
+use super::fields::mesh_from_rows;
 use super::npz::{read_npz, Array2};
 use crate::mesh::{orientation, Mesh};
 use std::path::Path;
@@ -65,7 +66,7 @@ pub(crate) fn read_mesh<const N: usize>(
             "array \"simplices\" must hold integer vertex indices, not floats or bools (e.g. simplices.astype(numpy.int64))".into(),
         ));
     }
-    super::build::mesh_from_rows::<N>(
+    mesh_from_rows::<N>(
         &v.data,
         v.shape.0,
         &s.data,

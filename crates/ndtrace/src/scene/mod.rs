@@ -5,63 +5,64 @@ pub mod animation;
 pub mod build;
 pub mod desc;
 pub mod errors;
+mod fields;
 pub mod mesh_file;
 pub mod npz;
+mod transform;
 
 pub use build::{Light, Material, Object, Scene};
 pub use desc::SceneDesc;
 pub use errors::PathError;
 pub use mesh_file::MeshReader;
 
-use crate::{with_dim, NdError, NdResult};
+use crate::{with_dim, NdError, NdResult, MAX_DIM, MIN_DIM};
 use errors::{friendly_message, line_col, span_of};
 use std::path::{Path, PathBuf};
 
-/// A scene of any supported dimension: the one place where a runtime `dim` becomes `Scene<N>`.
-pub enum AnyScene {
-    D2(Scene<2>),
-    D3(Scene<3>),
-    D4(Scene<4>),
-    D5(Scene<5>),
-    D6(Scene<6>),
-    D7(Scene<7>),
-    D8(Scene<8>),
+/// Declares [`AnyScene`], one variant per dimension of [`crate::supported_dims!`], and its
+/// [`IntoAny`] conversions.
+macro_rules! any_scene {
+    (; $($n:literal $variant:ident),*) => {
+        /// A scene of any supported dimension: the one place where a runtime `dim` becomes
+        /// `Scene<N>` (see [`with_scene!`](crate::with_scene)).
+        pub enum AnyScene {
+            $(
+                #[doc = concat!("A scene in R^", stringify!($n), ".")]
+                $variant(Scene<$n>),
+            )*
+        }
+
+        $(
+            impl IntoAny for Scene<$n> {
+                fn into_any(self) -> AnyScene {
+                    AnyScene::$variant(self)
+                }
+            }
+        )*
+    };
 }
+crate::supported_dims!((any_scene));
 
 /// Runs `$body` with `$s` bound to the `Scene<N>` inside an [`AnyScene`] (and `$N` to N).
 #[macro_export]
 macro_rules! with_scene {
-    ($any:expr, $s:ident, $N:ident => $body:expr) => {{
-        use $crate::scene::AnyScene as A;
+    ($any:expr, $s:ident, $N:ident => $body:expr) => {
+        $crate::supported_dims!(($crate::__with_scene_arms) $any, $s, $N, $body)
+    };
+}
+
+/// The `match` of [`with_scene!`], one arm per [`AnyScene`] variant.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __with_scene_arms {
+    ($any:expr, $s:ident, $N:ident, $body:expr ; $($n:literal $variant:ident),*) => {{
         match $any {
-            A::D2($s) => {
-                const $N: usize = 2;
-                $body
-            }
-            A::D3($s) => {
-                const $N: usize = 3;
-                $body
-            }
-            A::D4($s) => {
-                const $N: usize = 4;
-                $body
-            }
-            A::D5($s) => {
-                const $N: usize = 5;
-                $body
-            }
-            A::D6($s) => {
-                const $N: usize = 6;
-                $body
-            }
-            A::D7($s) => {
-                const $N: usize = 7;
-                $body
-            }
-            A::D8($s) => {
-                const $N: usize = 8;
-                $body
-            }
+            $(
+                $crate::scene::AnyScene::$variant($s) => {
+                    const $N: usize = $n;
+                    $body
+                }
+            )*
         }
     }};
 }
@@ -218,7 +219,7 @@ fn build_any(
         PathError::new(
             "dim",
             format!(
-                "dimension {} is not supported: dim must be in 2..=8",
+                "dimension {} is not supported: dim must be in {MIN_DIM}..={MAX_DIM}",
                 desc.dim
             ),
         )
@@ -230,15 +231,6 @@ pub trait IntoAny {
     /// The wrapped scene.
     fn into_any(self) -> AnyScene;
 }
-
-macro_rules! into_any {
-    ($($n:literal => $v:ident),*) => {$(
-        impl IntoAny for Scene<$n> {
-            fn into_any(self) -> AnyScene { AnyScene::$v(self) }
-        }
-    )*};
-}
-into_any!(2 => D2, 3 => D3, 4 => D4, 5 => D5, 6 => D6, 7 => D7, 8 => D8);
 
 impl AnyScene {
     /// The dimension N.
@@ -254,6 +246,42 @@ impl AnyScene {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The boundary of the regular N-simplex seen from +x_N, in dimension `dim`.
+    fn simplex_scene(dim: usize) -> String {
+        let axis = |k: usize, x: f64| -> String {
+            let e: Vec<String> = (0..dim)
+                .map(|i| if i == k { x.to_string() } else { "0".into() })
+                .collect();
+            format!("[{}]", e.join(", "))
+        };
+        let up: Vec<String> = (1..dim - 1).map(|k| axis(k, 1.0)).collect();
+        format!(
+            "dim = {dim}\n[camera]\nposition = {}\nlook_at = {}\nup = [{}]\nfov = 40\n\
+             resolution = 2\n[[objects]]\nshape = \"simplex\"\n",
+            axis(dim - 1, 4.0),
+            axis(0, 0.0),
+            up.join(", ")
+        )
+    }
+
+    #[test]
+    fn every_supported_dimension_has_its_scene_variant() {
+        for &d in crate::dim::SUPPORTED_DIMS {
+            let (_, scene) = load_toml_str(&simplex_scene(d), "simplex.toml", None).unwrap();
+            assert_eq!(scene.dim(), d);
+            // `with_scene!` binds the Scene<N> of the variant with N = d: its vectors have d
+            // coordinates, and the simplex's boundary d + 1 facets.
+            let (n, coords, facets) =
+                with_scene!(&scene, s, N => (N, s.camera.position.len(), s.bvh.len()));
+            assert_eq!((n, coords, facets), (d, d, d + 1));
+            // And back: the scene taken out of the enum goes into the same variant.
+            let again = with_scene!(scene, s, _N => s.into_any());
+            assert_eq!(again.dim(), d);
+        }
+        let e = err(&simplex_scene(3).replace("dim = 3", "dim = 9"));
+        assert!(e.contains("dim must be in 2..=8"), "{e}");
+    }
 
     const CUBE: &str = r#"
 dim = 4

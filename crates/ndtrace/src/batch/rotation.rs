@@ -4,9 +4,10 @@
 //! argument and, for batches, the item in C order; then it dispatches on `dim` through
 //! [`crate::with_dim!`]. The batch size is inferred from the buffer lengths.
 
-use super::*;
-use crate::batch::{batch_len, check_len};
-use crate::with_dim;
+use super::{as_matrices, as_matrices_mut, as_vectors, batch_len, check_len};
+use crate::linalg::Matrix;
+use crate::rotation::{self, *};
+use crate::{with_dim, NdError, NdResult};
 
 fn with_index(message: String, index: usize, batch: usize) -> String {
     if batch > 1 {
@@ -40,18 +41,6 @@ fn unit_items(arg: &str, buf: &[f64], width: usize, what: &str) -> NdResult<()> 
         }
     }
     Ok(())
-}
-
-fn as_vectors<const N: usize>(flat: &[f64]) -> &[Vector<N>] {
-    flat.as_chunks::<N>().0
-}
-
-fn as_matrices<const N: usize>(flat: &[f64]) -> &[Matrix<N>] {
-    flat.as_chunks::<N>().0.as_chunks::<N>().0
-}
-
-fn as_matrices_mut<const N: usize>(flat: &mut [f64]) -> &mut [Matrix<N>] {
-    flat.as_chunks_mut::<N>().0.as_chunks_mut::<N>().0
 }
 
 fn as_quats(flat: &[f64]) -> &[Quat] {
@@ -98,7 +87,7 @@ pub fn plane_rotation(
     with_dim!(dim, N => {
         check_len("out", out, N * N, thetas.len(), "(N, N)")?;
         for (o, &t) in as_matrices_mut::<N>(out).iter_mut().zip(thetas) {
-            *o = super::plane_rotation::<N>(i, j, t);
+            *o = rotation::plane_rotation::<N>(i, j, t);
         }
         Ok(())
     })?
@@ -114,7 +103,7 @@ pub fn compose(dim: usize, k: usize, rotations: &[f64], out: &mut [f64]) -> NdRe
         let mats = as_matrices::<N>(rotations);
         rotation_items("rotations", mats)?;
         for (idx, o) in as_matrices_mut::<N>(out).iter_mut().enumerate() {
-            *o = super::compose(&mats[idx * k..(idx + 1) * k]);
+            *o = rotation::compose(&mats[idx * k..(idx + 1) * k]);
         }
         Ok(())
     })?
@@ -139,7 +128,7 @@ pub fn rolling_ball(
         let b = batch_len("displacement", displacement, N - 1, "(N−1,)")?;
         check_len("out", out, N * N, b, "(N, N)")?;
         for (o, d) in as_matrices_mut::<N>(out).iter_mut().zip(displacement.chunks_exact(N - 1)) {
-            *o = super::rolling_ball::<N>(d, radius, angle);
+            *o = rotation::rolling_ball::<N>(d, radius, angle);
         }
         Ok(())
     })?
@@ -160,7 +149,7 @@ pub fn frame(dim: usize, k: usize, vectors: &[f64], out: &mut [f64]) -> NdResult
         check_len("out", out, N * N, b, "(N, N)")?;
         let vs = as_vectors::<N>(vectors);
         for (idx, o) in as_matrices_mut::<N>(out).iter_mut().enumerate() {
-            *o = super::frame(&vs[idx * k..(idx + 1) * k]).map_err(|e| at_index(e, idx, b))?;
+            *o = rotation::frame(&vs[idx * k..(idx + 1) * k]).map_err(|e| at_index(e, idx, b))?;
         }
         Ok(())
     })?
@@ -177,7 +166,7 @@ pub fn rotation_between(dim: usize, a: &[f64], b: &[f64], out: &mut [f64]) -> Nd
         unit_items("b", b, N, "vector")?;
         let (av, bv) = (as_vectors::<N>(a), as_vectors::<N>(b));
         for ((o, x), y) in as_matrices_mut::<N>(out).iter_mut().zip(av).zip(bv) {
-            *o = super::rotation_between(x, y);
+            *o = rotation::rotation_between(x, y);
         }
         Ok(())
     })?
@@ -215,7 +204,7 @@ pub fn look_at(
         check_len("target", target, N, 1, "(N,)")?;
         check_len("up", up, N, N - 2, "(N,)")?;
         check_len("out", out, N * N, 1, "(N, N)")?;
-        let m = super::look_at::<N>(&as_vectors(position)[0], &as_vectors(target)[0], as_vectors(up))?;
+        let m = rotation::look_at::<N>(&as_vectors(position)[0], &as_vectors(target)[0], as_vectors(up))?;
         as_matrices_mut::<N>(out)[0] = m;
         Ok(())
     })?
@@ -233,7 +222,7 @@ pub fn slerp(dim: usize, a: &[f64], b: &[f64], ts: &[f64], out: &mut [f64]) -> N
         let (av, bv) = (as_vectors::<N>(a), as_vectors::<N>(b));
         for (o, idx) in out.chunks_exact_mut(N).zip(0..) {
             let (ti, bi) = (idx / n, idx % n);
-            o.copy_from_slice(&super::slerp(&av[bi], &bv[bi], ts[ti]));
+            o.copy_from_slice(&rotation::slerp(&av[bi], &bv[bi], ts[ti]));
         }
         Ok(())
     })?
@@ -249,7 +238,7 @@ pub fn to_nested_spheres(dim: usize, rotations: &[f64], out: &mut [f64]) -> NdRe
         let mats = as_matrices::<N>(rotations);
         rotation_items("R", mats)?;
         for (o, m) in out.chunks_exact_mut(w).zip(mats) {
-            let flat: Vec<f64> = super::to_nested_spheres(m).concat();
+            let flat: Vec<f64> = rotation::to_nested_spheres(m).concat();
             o.copy_from_slice(&flat);
         }
         Ok(())
@@ -270,7 +259,7 @@ pub fn from_nested_spheres(dim: usize, packed: &[f64], out: &mut [f64]) -> NdRes
                 vs.push(p[at..at + k].to_vec());
                 at += k;
             }
-            *o = super::from_nested_spheres::<N>(&vs).map_err(|e| at_index(e, idx, b))?;
+            *o = rotation::from_nested_spheres::<N>(&vs).map_err(|e| at_index(e, idx, b))?;
         }
         Ok(())
     })?
@@ -293,7 +282,7 @@ pub fn nested_slerp(
         rotation_items("R0", a)?;
         rotation_items("R1", b)?;
         for (o, &t) in as_matrices_mut::<N>(out).iter_mut().zip(ts) {
-            *o = super::nested_slerp(&a[0], &b[0], t);
+            *o = rotation::nested_slerp(&a[0], &b[0], t);
         }
         Ok(())
     })?
@@ -315,7 +304,7 @@ pub fn quat_conjugate(q: &[f64], out: &mut [f64]) -> NdResult<()> {
     let n = batch_len("q", q, 4, "(4,)")?;
     check_len("out", out, 4, n, "(4,)")?;
     for (o, x) in out.chunks_exact_mut(4).zip(as_quats(q)) {
-        o.copy_from_slice(&super::quat_conjugate(x));
+        o.copy_from_slice(&rotation::quat_conjugate(x));
     }
     Ok(())
 }
@@ -326,7 +315,7 @@ pub fn quat_to_matrix(q: &[f64], out: &mut [f64]) -> NdResult<()> {
     check_len("out", out, 9, n, "(3, 3)")?;
     unit_items("q", q, 4, "quaternion")?;
     for (o, x) in as_matrices_mut::<3>(out).iter_mut().zip(as_quats(q)) {
-        *o = super::quat_to_matrix(x);
+        *o = rotation::quat_to_matrix(x);
     }
     Ok(())
 }
@@ -338,7 +327,7 @@ pub fn matrix_to_quat(m: &[f64], stride: usize, out: &mut [f64]) -> NdResult<()>
     check_len("out", out, 4, n, "(4,)")?;
     let mats = as_matrices::<3>(m);
     rotation_items("R", mats)?;
-    let mut qs: Vec<Quat> = mats.iter().map(super::matrix_to_quat).collect();
+    let mut qs: Vec<Quat> = mats.iter().map(rotation::matrix_to_quat).collect();
     if stride > 0 {
         continuous_signs(&mut qs, stride);
     }
@@ -358,7 +347,7 @@ pub fn so4_from_quaternions(q: &[f64], p: &[f64], out: &mut [f64]) -> NdResult<(
         .zip(as_quats(q))
         .zip(as_quats(p))
     {
-        *o = super::so4_from_quaternions(x, y);
+        *o = rotation::so4_from_quaternions(x, y);
     }
     Ok(())
 }
@@ -370,7 +359,7 @@ pub fn quaternions_from_so4(m: &[f64], out: &mut [f64]) -> NdResult<()> {
     let mats = as_matrices::<4>(m);
     rotation_items("R", mats)?;
     for (o, x) in out.chunks_exact_mut(8).zip(mats) {
-        let (q, p) = super::quaternions_from_so4(x);
+        let (q, p) = rotation::quaternions_from_so4(x);
         o[..4].copy_from_slice(&q);
         o[4..].copy_from_slice(&p);
     }
@@ -396,7 +385,7 @@ pub fn slerp_so4(
     let g = |v: &[f64]| -> Quat { std::array::from_fn(|i| v[i]) };
     let (q0, p0, q1, p1) = (g(q0), g(p0), g(q1), g(p1));
     for (o, &t) in out.chunks_exact_mut(8).zip(ts) {
-        let (q, p) = super::slerp_so4((&q0, &p0), (&q1, &p1), t);
+        let (q, p) = rotation::slerp_so4((&q0, &p0), (&q1, &p1), t);
         o[..4].copy_from_slice(&q);
         o[4..].copy_from_slice(&p);
     }
@@ -413,7 +402,7 @@ pub fn arcball_4d(a0: &[f64], a1: &[f64], b0: &[f64], b1: &[f64], out: &mut [f64
     check_len("out", out, 16, n, "(4, 4)")?;
     let (a0, a1, b0, b1) = (as_quats(a0), as_quats(a1), as_quats(b0), as_quats(b1));
     for (i, o) in as_matrices_mut::<4>(out).iter_mut().enumerate() {
-        *o = super::arcball_4d(&a0[i], &a1[i], &b0[i], &b1[i]);
+        *o = rotation::arcball_4d(&a0[i], &a1[i], &b0[i], &b1[i]);
     }
     Ok(())
 }
@@ -505,7 +494,7 @@ mod tests {
     #[test]
     fn continuity_runs_along_the_stride() {
         // Two interleaved tracks; each item is the canonical quaternion, flipped as needed.
-        let rot = |th: f64| super::super::plane_rotation::<3>(0, 1, th);
+        let rot = |th: f64| crate::rotation::plane_rotation::<3>(0, 1, th);
         let ms: Vec<Matrix<3>> = [3.0, 0.1, 3.3, 0.2].iter().map(|&t| rot(t)).collect();
         let flat: Vec<f64> = ms.iter().flat_map(|m| m.as_flattened().to_vec()).collect();
         let mut out = vec![0.0; 16];

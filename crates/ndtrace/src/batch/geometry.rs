@@ -6,6 +6,7 @@
 //! Results that are a tuple in Python (`hyperplane`, `point_hyperplane_distance`) are packed
 //! per item (`[n̂…, c]`, `[h, p…]`).
 
+use super::{as_vectors, batch_len, check_len};
 use crate::geometry::{self, Degenerate};
 use crate::linalg::Vector;
 use crate::{with_dim, NdError, NdResult};
@@ -18,32 +19,6 @@ pub enum OnDegenerate {
     Error,
     /// Fill that item's result with NaN and go on.
     Nan,
-}
-
-/// Views a flat buffer as points of R^N.
-#[inline]
-fn as_points<const N: usize>(flat: &[f64]) -> &[Vector<N>] {
-    let (points, rest) = flat.as_chunks::<N>();
-    debug_assert!(rest.is_empty());
-    points
-}
-
-/// Checks that `buf` holds `batch` items of `per_item` floats.
-pub fn check_len(
-    arg: &str,
-    buf: &[f64],
-    per_item: usize,
-    batch: usize,
-    shape: &str,
-) -> NdResult<()> {
-    if buf.len() != per_item * batch {
-        return Err(NdError::Shape {
-            arg: arg.into(),
-            expected: format!("{batch} items of {shape} ({} floats)", per_item * batch),
-            got: format!("{} floats", buf.len()),
-        });
-    }
-    Ok(())
 }
 
 /// Runs `f(i, out_i)` for every item in parallel; a degenerate item is filled with NaN and,
@@ -81,24 +56,12 @@ where
     }
 }
 
-/// Number of items in a batch buffer, checking that it divides evenly.
-pub fn batch_len(arg: &str, buf: &[f64], per_item: usize, shape: &str) -> NdResult<usize> {
-    if per_item == 0 || !buf.len().is_multiple_of(per_item) {
-        return Err(NdError::Shape {
-            arg: arg.into(),
-            expected: format!("a multiple of {per_item} floats ({shape})"),
-            got: format!("{} floats", buf.len()),
-        });
-    }
-    Ok(buf.len() / per_item)
-}
-
 /// Batched [`geometry::generalized_cross`]: edges `(B, N−1, N)` → `(B, N)`.
 pub fn generalized_cross(dim: usize, edges: &[f64], out: &mut [f64]) -> NdResult<()> {
     with_dim!(dim, N => {
         let b = batch_len("edges", edges, (N - 1) * N, "(N−1, N)")?;
         check_len("out", out, N, b, "(N,)")?;
-        let e = as_points::<N>(edges);
+        let e = as_vectors::<N>(edges);
         run_items("edges", out, N, OnDegenerate::Nan, |i, o| {
             o.copy_from_slice(&geometry::generalized_cross(&e[i * (N - 1)..(i + 1) * (N - 1)]));
             Ok(())
@@ -111,7 +74,7 @@ pub fn signed_volume(dim: usize, points: &[f64], out: &mut [f64]) -> NdResult<()
     with_dim!(dim, N => {
         let b = batch_len("points", points, (N + 1) * N, "(N+1, N)")?;
         check_len("out", out, 1, b, "()")?;
-        let p = as_points::<N>(points);
+        let p = as_vectors::<N>(points);
         run_items("points", out, 1, OnDegenerate::Nan, |i, o| {
             o[0] = geometry::signed_volume(&p[i * (N + 1)..(i + 1) * (N + 1)]);
             Ok(())
@@ -136,7 +99,7 @@ pub fn gram_volume(dim: usize, k: usize, points: &[f64], out: &mut [f64]) -> NdR
     with_dim!(dim, N => {
         let b = batch_len("points", points, (k + 1) * N, "(K+1, N)")?;
         check_len("out", out, 1, b, "()")?;
-        let p = as_points::<N>(points);
+        let p = as_vectors::<N>(points);
         run_items("points", out, 1, OnDegenerate::Nan, |i, o| {
             o[0] = geometry::gram_volume(&p[i * (k + 1)..(i + 1) * (k + 1)]);
             Ok(())
@@ -149,7 +112,7 @@ pub fn hyperplane(dim: usize, points: &[f64], out: &mut [f64], on: OnDegenerate)
     with_dim!(dim, N => {
         let b = batch_len("points", points, N * N, "(N, N)")?;
         check_len("out", out, N + 1, b, "(N+1,)")?;
-        let p = as_points::<N>(points);
+        let p = as_vectors::<N>(points);
         run_items("points", out, N + 1, on, |i, o| {
             let h = geometry::hyperplane(&p[i * N..(i + 1) * N])?;
             o[..N].copy_from_slice(&h.normal);
@@ -172,7 +135,7 @@ pub fn point_hyperplane_distance(
         let b = batch_len("points", points, N * N, "(N, N)")?;
         check_len("x", x, N, b, "(N,)")?;
         check_len("out", out, N + 1, b, "(N+1,)")?;
-        let (xs, p) = (as_points::<N>(x), as_points::<N>(points));
+        let (xs, p) = (as_vectors::<N>(x), as_vectors::<N>(points));
         run_items("points", out, N + 1, on, |i, o| {
             let (h, foot) = geometry::point_hyperplane_distance(&xs[i], &p[i * N..(i + 1) * N])?;
             o[0] = h;
@@ -198,7 +161,7 @@ pub fn barycentric(
         let b = batch_len("points", points, (k + 1) * N, "(K+1, N)")?;
         check_len("x", x, N, b, "(N,)")?;
         check_len("out", out, k + 1, b, "(K+1,)")?;
-        let (xs, p) = (as_points::<N>(x), as_points::<N>(points));
+        let (xs, p) = (as_vectors::<N>(x), as_vectors::<N>(points));
         run_items("points", out, k + 1, on, |i, o| {
             geometry::barycentric(&xs[i], &p[i * (k + 1)..(i + 1) * (k + 1)], o)
         })
@@ -211,7 +174,7 @@ pub fn side(dim: usize, x: &[f64], points: &[f64], out: &mut [f64]) -> NdResult<
         let b = batch_len("points", points, N * N, "(N, N)")?;
         check_len("x", x, N, b, "(N,)")?;
         check_len("out", out, 1, b, "()")?;
-        let (xs, p) = (as_points::<N>(x), as_points::<N>(points));
+        let (xs, p) = (as_vectors::<N>(x), as_vectors::<N>(points));
         run_items("points", out, 1, OnDegenerate::Nan, |i, o| {
             o[0] = f64::from(geometry::side(&xs[i], &p[i * N..(i + 1) * N]));
             Ok(())
@@ -233,7 +196,7 @@ pub fn clip_segment(
         check_len("a", a, N, n, "(N,)")?;
         check_len("b", b, N, n, "(N,)")?;
         check_len("out", out, 1, n, "()")?;
-        let (av, bv, p) = (as_points::<N>(a), as_points::<N>(b), as_points::<N>(points));
+        let (av, bv, p) = (as_vectors::<N>(a), as_vectors::<N>(b), as_vectors::<N>(points));
         run_items("segment", out, 1, on, |i, o| {
             o[0] = geometry::clip_segment(&av[i], &bv[i], &p[i * N..(i + 1) * N])?;
             Ok(())
@@ -255,7 +218,7 @@ pub fn ray_hyperplane(
         check_len("origin", origin, N, n, "(N,)")?;
         check_len("direction", direction, N, n, "(N,)")?;
         check_len("out", out, 1, n, "()")?;
-        let (c, d, p) = (as_points::<N>(origin), as_points::<N>(direction), as_points::<N>(points));
+        let (c, d, p) = (as_vectors::<N>(origin), as_vectors::<N>(direction), as_vectors::<N>(points));
         run_items("ray", out, 1, on, |i, o| {
             o[0] = geometry::ray_hyperplane(&c[i], &d[i], &p[i * N..(i + 1) * N])?;
             Ok(())
@@ -274,7 +237,7 @@ pub fn transform_normal(
         let b = batch_len("matrix", matrix, N * N, "(N, N)")?;
         check_len("normal", normal, N, b, "(N,)")?;
         check_len("out", out, N, b, "(N,)")?;
-        let (m, nv) = (as_points::<N>(matrix), as_points::<N>(normal));
+        let (m, nv) = (as_vectors::<N>(matrix), as_vectors::<N>(normal));
         run_items("matrix", out, N, OnDegenerate::Nan, |i, o| {
             let mi: [Vector<N>; N] = std::array::from_fn(|r| m[i * N + r]);
             o.copy_from_slice(&geometry::transform_normal(&mi, &nv[i]));

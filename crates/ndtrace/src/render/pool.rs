@@ -1,14 +1,12 @@
 //! Retina output buffers kept for reuse between traces.
 //!
 //! A retina's outputs would otherwise be fresh memory on every trace, and the first write to
-//! each 4 KiB page of fresh memory is a page fault in which the kernel zeroes the page. On the
-//! 2-core benchmark machines that costs about 2 µs per page: 18,000 faults and 30–50 ms of
-//! system time for the 96 MB of a 4D retina at 128³ (a fifth of its trace), 2,800 faults for
-//! a 512² image. Buffers handed back with [`recycle`] (the Python bindings do so when numpy
-//! frees a retina's arrays) are reused by the next trace instead, so a loop that traces, reads
-//! and drops its results only touches fresh memory on the first trace. They come back as they
-//! were, not cleared: the tracer writes every element of its outputs, and clearing 100 MB of
-//! a 4D retina at 128³ would cost another 5–10 ms per trace.
+//! each 4 KiB page of fresh memory is a page fault in which the kernel zeroes the page: for the
+//! hundred megabytes of a large 4D retina, a good part of the trace. Buffers handed back with
+//! [`recycle`] (the Python bindings do so when numpy frees a retina's arrays) are reused by the
+//! next trace instead, so a loop that traces, reads and drops its results only touches fresh
+//! memory on the first trace. They come back as they were, not cleared: the tracer writes
+//! every element of its outputs, and clearing them would cost another pass over the memory.
 //!
 //! At most [`KEEP_BUFFERS`] buffers per element type and [`KEEP_BYTES`] in all are kept;
 //! [`release`] frees them.
@@ -62,6 +60,7 @@ impl Default for Pool {
 }
 
 impl Pool {
+    /// An empty pool.
     pub const fn new() -> Self {
         Pool(Mutex::new(Kept {
             f32: Vec::new(),

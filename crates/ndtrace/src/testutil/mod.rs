@@ -1,4 +1,7 @@
-//! Seeded random inputs shared by the unit tests.
+//! What the unit tests share: seeded random inputs, the per-dimension driver
+//! [`for_each_dim!`], and test oracles ([`exact`]).
+
+pub mod exact;
 
 use crate::linalg::{det, dot, norm, scale, sub, Matrix, Vector};
 use rand::{Rng, SeedableRng};

@@ -1,0 +1,212 @@
+//! [`trace`]: the retina, chunk by chunk in parallel, each chunk group by group, each cell's
+//! value from its rays.
+
+use super::packets::{GroupTracer, ObjectShading};
+use super::pool;
+use super::sampling::{sample_offsets, SplitMix};
+use super::shade::depth_range;
+use super::tiles::{chunking, tile_order};
+use super::{NearestHit, Progress, Retina};
+use crate::accel::PACKET;
+use crate::camera::CentreRays;
+use crate::linalg::dot;
+use crate::scene::desc::RenderMode;
+use crate::scene::Scene;
+use crate::{NdError, NdResult};
+use rayon::prelude::*;
+use std::sync::atomic::Ordering;
+
+/// Traces every retina cell of `scene` (on the current rayon pool).
+pub fn trace<const N: usize>(scene: &Scene<N>, progress: &Progress) -> NdResult<Retina> {
+    // Back-face culling (course notes): discard a simplex when det[x_1−x_0 … | C − x_0] < 0,
+    // i.e. when its normal points away from the eye. The eye is fixed per trace.
+    if scene.render.cull_backfaces {
+        let culled: Vec<bool> = (0..scene.flat_normals.len())
+            .into_par_iter()
+            .map(|g| {
+                let (o, s) = scene.locate(g as u32);
+                let obj = &scene.objects[o];
+                let x0 = obj.mesh.vertices[obj.mesh.simplices[s][0] as usize];
+                dot(&scene.flat_normals[g], &scene.camera.toward_eye(&x0)) < 0.0
+            })
+            .collect();
+        trace_accepting(scene, progress, |id| !culled[id as usize])
+    } else {
+        trace_accepting(scene, progress, |_| true)
+    }
+}
+
+/// [`trace`] with camera rays that see only the simplices whose global id passes `accept`.
+fn trace_accepting<const N: usize, F>(
+    scene: &Scene<N>,
+    progress: &Progress,
+    accept: F,
+) -> NdResult<Retina>
+where
+    F: Fn(u32) -> bool + Sync,
+{
+    let cam = &scene.camera;
+    let cells = cam.cell_count();
+    // Kept buffers when the last retina's were handed back ([`pool`]), not cleared: the loop
+    // writes every element of every cell, misses included.
+    let mut rgba = pool::take::<f32>(cells * 4);
+    let mut depth = pool::take::<f32>(cells);
+    let mut normal = pool::take::<f32>(cells * N);
+    let mut object_id = pool::take::<i32>(cells);
+    let mut primitive_id = pool::take::<i64>(cells);
+    let samples = scene.render.samples as usize;
+    // Only the depth mode uses it (it reads every vertex).
+    let depth_range = match scene.render.mode {
+        RenderMode::Depth => depth_range(scene),
+        _ => (0.0, 1.0),
+    };
+
+    // Cells are traced in groups whose rays fill four packets (all samples of a cell go
+    // together), so that the fewer shadow rays of a group still fill their packets.
+    let group = (4 * PACKET / samples).max(1);
+    let row = cam.resolution[0];
+    let (chunk_cells, tiled) = chunking(row, N - 1);
+    // The order of a whole chunk, when there is one (the last chunk may be shorter).
+    let tiles = (tiled && chunk_cells <= cells).then(|| tile_order(row, chunk_cells / row));
+    // One sample per cell: its centre.
+    let centre = CentreRays::new(cam);
+    let shading = ObjectShading::all(scene);
+    rgba.par_chunks_mut(chunk_cells * 4)
+        .zip(depth.par_chunks_mut(chunk_cells))
+        .zip(normal.par_chunks_mut(chunk_cells * N))
+        .zip(object_id.par_chunks_mut(chunk_cells))
+        .zip(primitive_id.par_chunks_mut(chunk_cells))
+        .enumerate()
+        .for_each(
+            |(chunk, ((((rgba, depth), normal), object_id), primitive_id))| {
+                if progress.cancel.load(Ordering::Relaxed) {
+                    return;
+                }
+                let mut group_tracer = GroupTracer::default();
+                let mut offsets = Vec::with_capacity(samples * (N - 1));
+                let mut u = [0.0; N];
+                let mut idx = [0; N];
+                cam.cell_index(chunk * chunk_cells, &mut idx);
+                // 1. The order of the chunk's cells: tiled when the chunks are whole rows, with
+                //    the multi-index of the first cell of each row of the chunk.
+                let len = depth.len();
+                let short;
+                let tiled = match &tiles {
+                    Some(t) if t.len() == len => Some(t.as_slice()),
+                    _ if tiled => {
+                        short = tile_order(row, len / row);
+                        Some(short.as_slice())
+                    }
+                    _ => None,
+                };
+                let mut rows = Vec::new();
+                if tiled.is_some() {
+                    for _ in 0..len / row {
+                        rows.push(idx);
+                        idx[0] = row - 1;
+                        cam.next_cell(&mut idx);
+                    }
+                }
+                for first in (0..len).step_by(group) {
+                    // 2. The rays of a group of cells: slots of the processing order, and the
+                    //    chunk's cell in each.
+                    let slots = first..(first + group).min(len);
+                    let cell_of = |s: usize| tiled.map_or(s, |t| t[s].0 as usize);
+                    group_tracer.rays.clear();
+                    for s in slots.clone() {
+                        let c = cell_of(s);
+                        if let Some(t) = tiled {
+                            let (_, r, col) = t[s];
+                            idx = rows[r as usize];
+                            idx[0] = col as usize;
+                        }
+                        if samples == 1 {
+                            group_tracer.rays.push(centre.ray(&idx));
+                        } else {
+                            let cell = chunk * chunk_cells + c;
+                            let mut rng = SplitMix::new(scene.render.seed, cell as u64);
+                            sample_offsets(samples, N - 1, &mut rng, &mut offsets);
+                            for f in offsets.chunks(N - 1) {
+                                cam.cell_point(&idx, f, &mut u);
+                                group_tracer.rays.push(cam.ray(&u[..N - 1]));
+                            }
+                        }
+                        if tiled.is_none() {
+                            cam.next_cell(&mut idx);
+                        }
+                    }
+                    // 3. Their nearest hits and colours.
+                    group_tracer.trace_and_shade(scene, &accept, &shading, depth_range);
+                    // 4. Each cell's value from its rays, into the retina.
+                    for (j, s) in slots.enumerate() {
+                        let c = cell_of(s);
+                        let (px, nearest) =
+                            cell_value(&group_tracer.color, &group_tracer.nearest, j, samples);
+                        rgba[c * 4..c * 4 + 4].copy_from_slice(&px);
+                        let nc: &mut [f32; N] =
+                            (&mut normal[c * N..(c + 1) * N]).try_into().unwrap();
+                        depth[c] = nearest.depth as f32;
+                        for k in 0..N {
+                            nc[k] = nearest.normal[k] as f32;
+                        }
+                        object_id[c] = nearest.object;
+                        primitive_id[c] = nearest.primitive;
+                    }
+                }
+                progress.done.fetch_add(depth.len(), Ordering::Relaxed);
+            },
+        );
+    if progress.cancel.load(Ordering::Relaxed) {
+        return Err(NdError::Cancelled);
+    }
+    Ok(Retina {
+        dim: N,
+        shape: cam.numpy_shape(),
+        rgba,
+        depth,
+        normal,
+        object_id,
+        primitive_id,
+    })
+}
+
+/// The value of the `j`-th cell of a group from its `samples` rays (rays `j·samples …` of
+/// `colors` and `hits`): premultiplied RGBA, the mean of their colours (misses' are 0) and the
+/// fraction that hit, and the nearest hit ([`NearestHit::MISS`] if none; the first sample of
+/// least depth).
+#[inline(always)]
+fn cell_value<'a, const N: usize>(
+    colors: &[[f64; 3]],
+    hits: &'a [NearestHit<N>],
+    j: usize,
+    samples: usize,
+) -> ([f32; 4], &'a NearestHit<N>) {
+    if samples == 1 {
+        // The loop below for one ray (the same bits: x·1 = x), without its overhead.
+        let (col, h) = (&colors[j], &hits[j]);
+        let a = if h.object >= 0 { 1.0 } else { 0.0 };
+        return (
+            [0.0 + col[0], 0.0 + col[1], 0.0 + col[2], a].map(|x| x as f32),
+            h,
+        );
+    }
+    let rays = j * samples..(j + 1) * samples;
+    let inv = 1.0 / samples as f64;
+    let mut color = [0.0f64; 3];
+    let mut covered = 0usize;
+    let mut nearest = &NearestHit::MISS;
+    for (col, h) in colors[rays.clone()].iter().zip(&hits[rays]) {
+        if h.object < 0 {
+            continue;
+        }
+        covered += 1;
+        for k in 0..3 {
+            color[k] += col[k];
+        }
+        if nearest.object < 0 || h.depth < nearest.depth {
+            nearest = h;
+        }
+    }
+    let px = [color[0], color[1], color[2], covered as f64].map(|x| (x * inv) as f32);
+    (px, nearest)
+}

@@ -1,0 +1,120 @@
+//! The small parsers every part of the scene build uses: a field of the description checked
+//! and converted to its typed value, or a [`PathError`] naming the field (`objects[2].material
+//! .color[1]: must be ≥ 0, got -1`).
+
+use super::desc::Coefficient;
+use super::errors::PathError;
+use crate::linalg::{Matrix, Vector};
+use crate::mesh::Mesh;
+
+/// A field's value or the located error.
+pub(crate) type R<T> = Result<T, PathError>;
+
+/// An RGB triple.
+pub type Rgb = [f64; 3];
+
+/// Every number of `v` is finite; else the error names the first that is not (`path[i]`).
+pub(crate) fn finite_list(v: &[f64], path: &str) -> R<()> {
+    match v.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(PathError::new(
+            format!("{path}[{i}]"),
+            format!("non-finite value {}", v[i]),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// A vector of exactly N finite numbers.
+pub(crate) fn vec_n<const N: usize>(v: &[f64], path: &str) -> R<Vector<N>> {
+    if v.len() != N {
+        return Err(PathError::new(
+            path,
+            format!("expected {N} numbers (dim = {N}), got {}", v.len()),
+        ));
+    }
+    finite_list(v, path)?;
+    Ok(std::array::from_fn(|i| v[i]))
+}
+
+/// An RGB triple of finite, non-negative numbers.
+pub(crate) fn rgb(v: &[f64], path: &str) -> R<Rgb> {
+    if v.len() != 3 {
+        return Err(PathError::new(
+            path,
+            format!("expected 3 numbers, got {}", v.len()),
+        ));
+    }
+    finite_list(v, path)?;
+    if let Some(i) = v.iter().position(|&x| x < 0.0) {
+        return Err(PathError::new(
+            format!("{path}[{i}]"),
+            format!("must be ≥ 0, got {}", v[i]),
+        ));
+    }
+    Ok([v[0], v[1], v[2]])
+}
+
+/// A reflection coefficient, one number for R, G and B or one per channel, as RGB.
+pub(crate) fn coefficient(c: &Coefficient, path: &str) -> R<Rgb> {
+    match c {
+        Coefficient::Scalar(s) => rgb(&[*s; 3], path),
+        Coefficient::Rgb(v) => rgb(v, path),
+    }
+}
+
+/// An N×N matrix given as N rows of N finite numbers.
+pub(crate) fn matrix_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<Matrix<N>> {
+    if rows.len() != N {
+        return Err(PathError::new(
+            path,
+            format!("expected {N} rows of {N} numbers, got {} rows", rows.len()),
+        ));
+    }
+    let mut m = [[0.0; N]; N];
+    for (i, row) in rows.iter().enumerate() {
+        m[i] = vec_n::<N>(row, &format!("{path}[{i}]"))?;
+    }
+    Ok(m)
+}
+
+/// A mesh from flat row-major arrays: `nv` vertices of N finite coordinates and `ns` simplices
+/// of N vertex indices (whole numbers below `nv`, given as floats); errors name the element
+/// (`vpath[i][k]`, `spath[s][k]`). `path` is the object's field path.
+pub(crate) fn mesh_from_rows<const N: usize>(
+    vertices: &[f64],
+    nv: usize,
+    simplices: &[f64],
+    ns: usize,
+    path: &str,
+    vpath: &str,
+    spath: &str,
+) -> R<Mesh<N>> {
+    if let Some(i) = vertices.iter().position(|x| !x.is_finite()) {
+        return Err(PathError::new(
+            format!("{vpath}[{}][{}]", i / N, i % N),
+            format!("non-finite coordinate {}", vertices[i]),
+        ));
+    }
+    let mut mesh = Mesh {
+        vertices: Vec::with_capacity(nv),
+        simplices: Vec::with_capacity(ns),
+    };
+    for v in vertices.chunks_exact(N) {
+        mesh.vertices.push(std::array::from_fn(|i| v[i]));
+    }
+    for (s, row) in simplices.chunks_exact(N).enumerate() {
+        let mut idx = [0u32; N];
+        for (k, &x) in row.iter().enumerate() {
+            if !(x >= 0.0 && x < nv as f64 && x.fract() == 0.0) {
+                return Err(PathError::new(
+                    format!("{spath}[{s}][{k}]"),
+                    format!("vertex index {x} out of range: the mesh has {nv} vertices"),
+                ));
+            }
+            idx[k] = x as u32;
+        }
+        mesh.simplices.push(idx);
+    }
+    let _ = path;
+    Ok(mesh)
+}
