@@ -31,6 +31,7 @@ pub mod exact;
 pub mod files;
 pub mod geometry;
 pub mod linalg;
+pub mod memory;
 pub mod mesh;
 pub mod names;
 pub mod pool;

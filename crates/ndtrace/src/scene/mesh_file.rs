@@ -46,13 +46,15 @@ pub(crate) fn read_mesh<const N: usize>(
         }
     };
     let [v, s] = arrays.map_err(|e| PathError::new(&fpath, e))?;
-    if v.shape.1 != N || v.data.len() != v.shape.0 * N {
+    // Checked: a header may declare any number of rows.
+    let holds = |a: &Array2| a.shape.0.checked_mul(N) == Some(a.data.len());
+    if v.shape.1 != N || !holds(&v) {
         return Err(PathError::new(
             &fpath,
             format!("vertices have shape {:?}, expected (V, {N})", v.shape),
         ));
     }
-    if s.shape.1 != N || !s.integer || s.data.len() != s.shape.0 * N {
+    if s.shape.1 != N || !s.integer || !holds(&s) {
         return Err(PathError::new(
             &fpath,
             format!(
