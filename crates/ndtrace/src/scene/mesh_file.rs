@@ -48,19 +48,23 @@ pub(crate) fn read_mesh<const N: usize>(
     let [v, s] = arrays.map_err(|e| PathError::new(&fpath, e))?;
     // Checked: a header may declare any number of rows.
     let holds = |a: &Array2| a.shape.0.checked_mul(N) == Some(a.data.len());
+    let shape_error =
+        |message: String| PathError::new(&fpath, format!("{}: {message}", full.display()));
     if v.shape.1 != N || !holds(&v) {
-        return Err(PathError::new(
-            &fpath,
-            format!("vertices have shape {:?}, expected (V, {N})", v.shape),
-        ));
+        return Err(shape_error(format!(
+            "array \"vertices\" has shape {:?}, expected (V, {N}) for a scene of dimension {N}",
+            v.shape
+        )));
     }
-    if s.shape.1 != N || !s.integer || !holds(&s) {
-        return Err(PathError::new(
-            &fpath,
-            format!(
-                "simplices must be integers of shape (S, {N}), got shape {:?}",
-                s.shape
-            ),
+    if s.shape.1 != N || !holds(&s) {
+        return Err(shape_error(format!(
+            "array \"simplices\" has shape {:?}, expected (S, {N}) for a scene of dimension {N}",
+            s.shape
+        )));
+    }
+    if !s.integer {
+        return Err(shape_error(
+            "array \"simplices\" must hold integer vertex indices, not floats or bools (e.g. simplices.astype(numpy.int64))".into(),
         ));
     }
     super::build::mesh_from_rows::<N>(

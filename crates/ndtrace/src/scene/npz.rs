@@ -1,6 +1,19 @@
 //! Reading 2-D numeric arrays from numpy `.npz` archives (zip files of `.npy` arrays), for mesh
 //! objects given by `file`.
+//!
+//! The `.npy` format is read by [`npyz`]: versions 1–3, either byte order, C or Fortran order.
+//! Floats (`f2`, `f4`, `f8`), integers (`i1`…`i8`, `u1`…`u8`) and `bool` become `f64`; any
+//! other element type, and arrays that are not 2-D, are refused with the array's name, shape and
+//! dtype. Every size a file claims is checked against the bytes it holds before anything is
+//! allocated or parsed, so that a broken or hostile file is an error and never a panic, a
+//! huge allocation or a deep recursion:
+//! - the archive entry is read as it decompresses, never preallocated from its claimed size;
+//! - the header length must fit in the entry, and is capped as numpy caps it (10,000 bytes);
+//! - the header's bracket nesting is bounded before the Python-literal parser sees it;
+//! - the shape's element count and byte count are products checked for overflow (npyz
+//!   multiplies the dimensions unchecked) and must fit in the data that follows the header.
 
+use npyz::{NpyFile, Order, TypeChar};
 use std::io::Read;
 use std::path::Path;
 
@@ -15,164 +28,447 @@ pub struct Array2 {
     pub integer: bool,
 }
 
-/// Reads the named 2-D arrays from an `.npz` file.
+/// The longest `.npy` header read: numpy's own default limit (`max_header_size`), far above
+/// what a numeric array's header needs.
+const MAX_HEADER_LEN: usize = 10_000;
+
+/// The deepest bracket nesting allowed in a header (a numeric array's has depth 2).
+const MAX_HEADER_DEPTH: usize = 16;
+
+/// Reads the named 2-D arrays from an `.npz` file; errors name the file and the array.
 pub fn read_npz(path: &Path, names: &[&str]) -> Result<Vec<Array2>, String> {
     let file =
         std::fs::File::open(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
-    let mut zip = zip::ZipArchive::new(file)
+    let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
         .map_err(|e| format!("{} is not an .npz (zip) archive: {e}", path.display()))?;
     names
         .iter()
         .map(|name| {
-            let mut entry = zip
-                .by_name(&format!("{name}.npy"))
+            let entry = zip
+                .by_name(&npyz::npz::file_name_from_array_name(name))
                 .map_err(|_| format!("{} has no array named \"{name}\"", path.display()))?;
-            let mut bytes = Vec::with_capacity(entry.size() as usize);
+            // Read as it decompresses (at most the size the entry claims), so that a claimed
+            // size is never an allocation.
+            let claimed = entry.size();
+            let mut bytes = Vec::new();
             entry
+                .take(claimed)
                 .read_to_end(&mut bytes)
-                .map_err(|e| format!("{}: reading \"{name}\": {e}", path.display()))?;
+                .map_err(|e| format!("{}: reading array \"{name}\": {e}", path.display()))?;
             parse_npy(&bytes).map_err(|e| format!("{}: array \"{name}\": {e}", path.display()))
         })
         .collect()
 }
 
-/// Parses a version 1–3 `.npy` buffer holding a 2-D little-endian numeric array.
+/// Parses an `.npy` buffer holding a 2-D numeric array.
 pub fn parse_npy(bytes: &[u8]) -> Result<Array2, String> {
-    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
-        return Err("not an .npy array".into());
-    }
-    let (header_len, start) = match bytes[6] {
-        1 => (u16::from_le_bytes([bytes[8], bytes[9]]) as usize, 10),
-        2 | 3 if bytes.len() >= 12 => (
-            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
-            12,
+    // 1. The sizes the header claims, checked before npyz parses or allocates anything.
+    let data_len = check_header(bytes)?;
+    let npy = NpyFile::new(bytes).map_err(|e| format!("not a valid .npy array: {e}"))?;
+    let header = npy.header();
+    let shape = header.shape().to_vec();
+    let dtype = header.dtype();
+    let descr = dtype.descr();
+    let (rows, cols) = match shape[..] {
+        [r, c] => (
+            usize::try_from(r).map_err(|_| too_big(&shape))?,
+            usize::try_from(c).map_err(|_| too_big(&shape))?,
         ),
-        v => return Err(format!("unsupported .npy version {v}")),
-    };
-    let header = bytes
-        .get(start..start + header_len)
-        .and_then(|h| std::str::from_utf8(h).ok())
-        .ok_or("truncated .npy header")?;
-    let field = |key: &str| -> Result<&str, String> {
-        let at = header
-            .find(&format!("'{key}'"))
-            .ok_or(format!("header lacks '{key}'"))?;
-        Ok(header[at + key.len() + 2..]
-            .trim_start()
-            .trim_start_matches(':')
-            .trim_start())
-    };
-    let descr = field("descr")?;
-    let descr = descr
-        .trim_start_matches('\'')
-        .split('\'')
-        .next()
-        .unwrap_or("");
-    if field("fortran_order")?.starts_with("True") {
-        return Err(
-            "Fortran-ordered arrays are not supported (use numpy.ascontiguousarray)".into(),
-        );
-    }
-    let shape_text = field("shape")?;
-    let shape_text = &shape_text[1..shape_text.find(')').ok_or("bad shape")?];
-    let dims: Vec<usize> = shape_text
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .map(|s| {
-            s.parse::<usize>()
-                .map_err(|_| format!("bad shape ({shape_text})"))
-        })
-        .collect::<Result<_, _>>()?;
-    let (rows, cols) = match dims[..] {
-        [r, c] => (r, c),
-        _ => return Err(format!("expected a 2-D array, got shape ({shape_text})")),
-    };
-    let data = &bytes[start + header_len..];
-    let count = rows * cols;
-    let (width, integer): (usize, bool) = match descr {
-        "<f8" | "<f4" | "|f1" => (descr[2..].parse().unwrap_or(8), false),
-        "<i8" | "<i4" | "<i2" | "|i1" | "<u8" | "<u4" | "<u2" | "|u1" => {
-            (descr[2..].parse().unwrap_or(8), true)
-        }
-        other => {
+        _ => {
             return Err(format!(
-                "unsupported dtype {other} (use float64 or an integer type)"
+                "expected a 2-D array, got a {}-D array of shape {} (dtype {descr}); save it with shape (rows, columns), e.g. a.reshape(-1, dim)",
+                shape.len(),
+                shape_text(&shape)
             ))
         }
     };
-    if data.len() < count * width {
+    // 2. The element type: a scalar float, integer or bool.
+    let unsupported = || {
+        format!(
+            "unsupported dtype {descr} (use a float, integer or bool type such as float64 or int64)"
+        )
+    };
+    let ty = match &dtype {
+        npyz::DType::Plain(ty) => ty.clone(),
+        _ => return Err(unsupported()),
+    };
+    let width = match (ty.type_char(), ty.size_field()) {
+        (TypeChar::Float, 2 | 4 | 8)
+        | (TypeChar::Int | TypeChar::Uint, 1 | 2 | 4 | 8)
+        | (TypeChar::Bool, 1) => ty.size_field(),
+        _ => return Err(unsupported()),
+    };
+    // 3. The data must hold every element.
+    let count = rows.checked_mul(cols).ok_or_else(|| too_big(&shape))?;
+    let need = (count as u64)
+        .checked_mul(width)
+        .ok_or_else(|| too_big(&shape))?;
+    if need > data_len as u64 {
         return Err(format!(
-            "truncated data: {} bytes for {count} values of {width} bytes",
-            data.len()
+            "truncated data: shape {} of {descr} needs {need} bytes, the array holds {data_len}",
+            shape_text(&shape)
         ));
     }
-    let conv = |c: &[u8]| -> f64 {
-        match descr {
-            "<f8" => f64::from_le_bytes(c.try_into().unwrap()),
-            "<f4" => f32::from_le_bytes(c.try_into().unwrap()) as f64,
-            "<i8" => i64::from_le_bytes(c.try_into().unwrap()) as f64,
-            "<i4" => i32::from_le_bytes(c.try_into().unwrap()) as f64,
-            "<i2" => i16::from_le_bytes(c.try_into().unwrap()) as f64,
-            "|i1" => c[0] as i8 as f64,
-            "<u8" => u64::from_le_bytes(c.try_into().unwrap()) as f64,
-            "<u4" => u32::from_le_bytes(c.try_into().unwrap()) as f64,
-            "<u2" => u16::from_le_bytes(c.try_into().unwrap()) as f64,
-            _ => c[0] as f64,
-        }
+    let order = header.order();
+    let read = |e: std::io::Error| format!("reading the data ({descr}): {e}");
+    let values: Vec<f64> = match (ty.type_char(), width) {
+        (TypeChar::Float, 2) => convert(npy.into_vec::<npyz::half::f16>(), f64::from),
+        (TypeChar::Float, 4) => convert(npy.into_vec::<f32>(), f64::from),
+        (TypeChar::Float, 8) => npy.into_vec::<f64>(),
+        (TypeChar::Int, 1) => convert(npy.into_vec::<i8>(), f64::from),
+        (TypeChar::Int, 2) => convert(npy.into_vec::<i16>(), f64::from),
+        (TypeChar::Int, 4) => convert(npy.into_vec::<i32>(), f64::from),
+        (TypeChar::Int, _) => convert(npy.into_vec::<i64>(), |v| v as f64),
+        (TypeChar::Uint, 1) => convert(npy.into_vec::<u8>(), f64::from),
+        (TypeChar::Uint, 2) => convert(npy.into_vec::<u16>(), f64::from),
+        (TypeChar::Uint, 4) => convert(npy.into_vec::<u32>(), f64::from),
+        (TypeChar::Uint, _) => convert(npy.into_vec::<u64>(), |v| v as f64),
+        _ => convert(npy.into_vec::<bool>(), |b| f64::from(u8::from(b))),
+    }
+    .map_err(read)?;
+    // 4. Fortran order stores columns one after the other: transpose to rows.
+    let data = match order {
+        Order::C => values,
+        Order::Fortran => (0..count)
+            .map(|k| values[(k % cols) * rows + k / cols])
+            .collect(),
     };
-    let values = data[..count * width]
-        .chunks_exact(width)
-        .map(conv)
-        .collect();
     Ok(Array2 {
         shape: (rows, cols),
-        data: values,
-        integer,
+        data,
+        integer: matches!(ty.type_char(), TypeChar::Int | TypeChar::Uint),
     })
+}
+
+fn convert<T>(
+    values: std::io::Result<Vec<T>>,
+    to_f64: impl Fn(T) -> f64,
+) -> std::io::Result<Vec<f64>> {
+    values.map(|v| v.into_iter().map(to_f64).collect())
+}
+
+fn shape_text(shape: &[u64]) -> String {
+    match shape {
+        [d] => format!("({d},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(u64::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+fn too_big(shape: &[u64]) -> String {
+    format!("shape {} is too large", shape_text(shape))
+}
+
+/// Checks the sizes an `.npy` header claims against the bytes there are, before npyz parses it:
+/// the header fits in the buffer, is no longer than [`MAX_HEADER_LEN`] and nests no deeper than
+/// [`MAX_HEADER_DEPTH`]; its shape's dimensions multiply without overflow and their product
+/// fits in the data. Returns the data's length in bytes.
+fn check_header(bytes: &[u8]) -> Result<usize, String> {
+    if bytes.len() < 8 || &bytes[..6] != b"\x93NUMPY" {
+        return Err("not an .npy array (no \\x93NUMPY magic)".into());
+    }
+    let (header_len, start) = match bytes[6] {
+        1 => match bytes.get(8..10) {
+            Some(b) => (usize::from(u16::from_le_bytes([b[0], b[1]])), 10),
+            None => return Err("truncated .npy header".into()),
+        },
+        2 | 3 => match bytes.get(8..12) {
+            Some(b) => (
+                usize::try_from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])).unwrap_or(usize::MAX),
+                12,
+            ),
+            None => return Err("truncated .npy header".into()),
+        },
+        v => return Err(format!("unsupported .npy version {v}.{}", bytes[7])),
+    };
+    if header_len > MAX_HEADER_LEN {
+        return Err(format!(
+            "the .npy header claims {header_len} bytes, more than the {MAX_HEADER_LEN} allowed"
+        ));
+    }
+    let text = bytes.get(start..start + header_len).ok_or_else(|| {
+        format!(
+            "truncated .npy header: it claims {header_len} bytes, the array holds {}",
+            bytes.len() - start.min(bytes.len())
+        )
+    })?;
+    let data_len = bytes.len() - start - header_len;
+    let text = std::str::from_utf8(text).map_err(|_| "the .npy header is not text")?;
+    // The nesting depth, ignoring brackets inside quotes (a crude scan is enough for a bound).
+    let (mut depth, mut deepest, mut quote) = (0usize, 0usize, None);
+    for c in text.chars() {
+        match (quote, c) {
+            (Some(q), c) if c == q => quote = None,
+            (Some(_), _) => {}
+            (None, '\'' | '"') => quote = Some(c),
+            (None, '(' | '[' | '{') => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            (None, ')' | ']' | '}') => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    if deepest > MAX_HEADER_DEPTH {
+        return Err(format!(
+            "the .npy header nests {deepest} brackets deep (at most {MAX_HEADER_DEPTH})"
+        ));
+    }
+    let value: py_literal::Value = text
+        .trim_end_matches('\n')
+        .parse()
+        .map_err(|e| format!("the .npy header is not a Python literal: {e}"))?;
+    let shape = match value {
+        py_literal::Value::Dict(entries) => entries.into_iter().find_map(|(k, v)| {
+            matches!(&k, py_literal::Value::String(s) if s == "shape").then_some(v)
+        }),
+        _ => None,
+    };
+    // Any dimension and any product of dimensions npyz forms (it multiplies them in either
+    // order, skipping none) is at most the product of max(d, 1), which must fit in u64; the
+    // element count itself (the plain product) cannot exceed the data's bytes.
+    if let Some(py_literal::Value::Tuple(dims) | py_literal::Value::List(dims)) = shape {
+        let (mut bound, mut count) = (1u64, 1u64);
+        for d in &dims {
+            let py_literal::Value::Integer(d) = d else {
+                continue; // npyz reports non-integer dimensions
+            };
+            let d = u64::try_from(d).map_err(|_| format!("bad dimension {d} in the shape"))?;
+            bound = bound
+                .checked_mul(d.max(1))
+                .ok_or_else(|| "the shape's dimensions overflow when multiplied".to_string())?;
+            count = count.saturating_mul(d);
+        }
+        if count > data_len as u64 {
+            return Err(format!(
+                "truncated data: the shape claims {count} elements, the array holds {data_len} bytes"
+            ));
+        }
+    }
+    Ok(data_len)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn npy(descr: &str, shape: &str, payload: &[u8]) -> Vec<u8> {
+    fn npy_with(version: u8, descr: &str, order: &str, shape: &str, payload: &[u8]) -> Vec<u8> {
         let mut header =
-            format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
-        while (10 + header.len() + 1) % 64 != 0 {
+            format!("{{'descr': '{descr}', 'fortran_order': {order}, 'shape': {shape}, }}");
+        let prefix = if version == 1 { 10 } else { 12 };
+        while (prefix + header.len() + 1) % 64 != 0 {
             header.push(' ');
         }
         header.push('\n');
-        let mut out = b"\x93NUMPY\x01\x00".to_vec();
-        out.extend((header.len() as u16).to_le_bytes());
+        let mut out = vec![0x93, b'N', b'U', b'M', b'P', b'Y', version, 0];
+        if version == 1 {
+            out.extend((header.len() as u16).to_le_bytes());
+        } else {
+            out.extend((header.len() as u32).to_le_bytes());
+        }
         out.extend(header.as_bytes());
         out.extend(payload);
         out
     }
 
-    #[test]
-    fn parses_float_and_integer_arrays() {
-        let payload: Vec<u8> = [1.5f64, -2.0, 3.0, 4.25]
-            .iter()
-            .flat_map(|v| v.to_le_bytes())
-            .collect();
-        let a = parse_npy(&npy("<f8", "(2, 2)", &payload)).unwrap();
-        assert_eq!(a.shape, (2, 2));
-        assert_eq!(a.data, vec![1.5, -2.0, 3.0, 4.25]);
-        let payload: Vec<u8> = [7i32, 8, 9].iter().flat_map(|v| v.to_le_bytes()).collect();
-        let a = parse_npy(&npy("<i4", "(1, 3)", &payload)).unwrap();
-        assert!(a.integer);
-        assert_eq!(a.data, vec![7.0, 8.0, 9.0]);
+    fn npy(descr: &str, shape: &str, payload: &[u8]) -> Vec<u8> {
+        npy_with(1, descr, "False", shape, payload)
+    }
+
+    fn bytes<T: Copy, const K: usize>(values: &[T], to: impl Fn(T) -> [u8; K]) -> Vec<u8> {
+        values.iter().flat_map(|&v| to(v)).collect()
     }
 
     #[test]
-    fn rejects_bad_arrays() {
-        assert!(parse_npy(b"hello world").is_err());
+    fn parses_float_and_integer_arrays_of_either_byte_order() {
+        let v = [1.5f64, -2.0, 3.0, 4.25];
+        for (descr, payload) in [
+            ("<f8", bytes(&v, f64::to_le_bytes)),
+            (">f8", bytes(&v, f64::to_be_bytes)),
+            ("<f4", bytes(&v.map(|x| x as f32), f32::to_le_bytes)),
+            (">f4", bytes(&v.map(|x| x as f32), f32::to_be_bytes)),
+            // float16: 1.5 = 0x3e00, -2 = 0xc000, 3 = 0x4200, 4.25 = 0x4440 (exact in half).
+            (
+                "<f2",
+                bytes(&[0x3e00u16, 0xc000, 0x4200, 0x4440], u16::to_le_bytes),
+            ),
+            (
+                ">f2",
+                bytes(&[0x3e00u16, 0xc000, 0x4200, 0x4440], u16::to_be_bytes),
+            ),
+        ] {
+            let a = parse_npy(&npy(descr, "(2, 2)", &payload)).unwrap();
+            assert_eq!(a.shape, (2, 2), "{descr}");
+            assert_eq!(a.data, v, "{descr}");
+            assert!(!a.integer, "{descr}");
+        }
+        let i = [7i64, -8, 9];
+        for (descr, payload) in [
+            ("<i8", bytes(&i, i64::to_le_bytes)),
+            (">i8", bytes(&i, i64::to_be_bytes)),
+            ("<i4", bytes(&i.map(|x| x as i32), i32::to_le_bytes)),
+            (">i4", bytes(&i.map(|x| x as i32), i32::to_be_bytes)),
+            (">i2", bytes(&i.map(|x| x as i16), i16::to_be_bytes)),
+            ("|i1", bytes(&i.map(|x| x as i8), i8::to_le_bytes)),
+        ] {
+            let a = parse_npy(&npy(descr, "(1, 3)", &payload)).unwrap();
+            assert_eq!((a.shape, a.integer), ((1, 3), true), "{descr}");
+            assert_eq!(a.data, [7.0, -8.0, 9.0], "{descr}");
+        }
+        let u = [0u64, 1, u32::MAX as u64 + 1];
+        for (descr, payload) in [
+            ("<u8", bytes(&u, u64::to_le_bytes)),
+            (">u8", bytes(&u, u64::to_be_bytes)),
+        ] {
+            let a = parse_npy(&npy(descr, "(3, 1)", &payload)).unwrap();
+            assert_eq!(a.data, [0.0, 1.0, 4294967296.0], "{descr}");
+        }
+        let a = parse_npy(&npy(
+            ">u2",
+            "(1, 2)",
+            &bytes(&[3u16, 65535], u16::to_be_bytes),
+        ))
+        .unwrap();
+        assert_eq!(a.data, [3.0, 65535.0]);
+        // bool: 0 and 1, not integers (so never vertex indices).
+        let a = parse_npy(&npy("|b1", "(1, 3)", &[1, 0, 1])).unwrap();
+        assert_eq!((a.data, a.integer), (vec![1.0, 0.0, 1.0], false));
+    }
+
+    #[test]
+    fn fortran_order_and_later_versions_read_as_rows() {
+        // [[1, 2, 3], [4, 5, 6]] stored column by column.
+        let payload = bytes(&[1.0f64, 4.0, 2.0, 5.0, 3.0, 6.0], f64::to_le_bytes);
+        let a = parse_npy(&npy_with(1, "<f8", "True", "(2, 3)", &payload)).unwrap();
+        assert_eq!(a.shape, (2, 3));
+        assert_eq!(a.data, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        for version in [2, 3] {
+            let a = parse_npy(&npy_with(version, "<f8", "False", "(3, 2)", &payload)).unwrap();
+            assert_eq!((a.shape, a.data[1]), ((3, 2), 4.0), "version {version}");
+        }
+        // Empty arrays are fine here (the mesh checks reject what they must).
+        let a = parse_npy(&npy("<i8", "(0, 4)", &[])).unwrap();
+        assert_eq!((a.shape, a.data.len()), ((0, 4), 0));
+    }
+
+    #[test]
+    fn arrays_that_are_not_2_d_or_not_numbers_are_refused_by_name() {
         let e = parse_npy(&npy("<f8", "(3,)", &[0; 24])).unwrap_err();
-        assert!(e.contains("2-D"), "{e}");
+        assert_eq!(e, "expected a 2-D array, got a 1-D array of shape (3,) (dtype '<f8'); save it with shape (rows, columns), e.g. a.reshape(-1, dim)");
+        let e = parse_npy(&npy("<f8", "(1, 1, 1)", &[0; 8])).unwrap_err();
+        assert!(e.contains("got a 3-D array of shape (1, 1, 1)"), "{e}");
+        let e = parse_npy(&npy("<f8", "()", &[0; 8])).unwrap_err();
+        assert!(e.contains("got a 0-D array"), "{e}");
+        for descr in ["<c16", "|S4", "<U1", "<M8[s]", "|V8", "<f16"] {
+            let e = parse_npy(&npy(descr, "(1, 1)", &[0; 16])).unwrap_err();
+            assert!(e.starts_with("unsupported dtype"), "{descr}: {e}");
+        }
+        let e = parse_npy(&npy_with(1, "|O", "False", "(1, 1)", &[0; 8])).unwrap_err();
+        assert!(e.starts_with("unsupported dtype"), "{e}");
+        let e = parse_npy(&npy("|b1", "(1, 2)", &[1, 2])).unwrap_err();
+        assert!(e.contains("invalid value for bool"), "{e}");
+    }
+
+    #[test]
+    fn claimed_sizes_are_checked_before_anything_is_allocated() {
+        assert!(parse_npy(b"").is_err());
+        assert!(parse_npy(b"hello world").unwrap_err().contains("magic"));
+        assert!(parse_npy(b"\x93NUMPY\x01\x00\x10")
+            .unwrap_err()
+            .contains("truncated"));
+        assert!(parse_npy(b"\x93NUMPY\x02\x00\x10\x00")
+            .unwrap_err()
+            .contains("truncated"));
+        assert!(parse_npy(b"\x93NUMPY\x04\x00\x00\x00")
+            .unwrap_err()
+            .contains("version 4.0"));
+        // A 4 GiB header claimed by 12 bytes.
+        let e = parse_npy(b"\x93NUMPY\x02\x00\xff\xff\xff\xff").unwrap_err();
+        assert!(e.contains("4294967295 bytes"), "{e}");
+        // A header longer than the entry.
+        let mut cut = npy("<f8", "(1, 1)", &[0; 8]);
+        cut.truncate(40);
+        assert!(parse_npy(&cut)
+            .unwrap_err()
+            .starts_with("truncated .npy header"));
+        // Too little data, and shapes whose products overflow (in either order, with zeros).
         let e = parse_npy(&npy("<f8", "(2, 2)", &[0; 8])).unwrap_err();
-        assert!(e.contains("truncated"), "{e}");
-        let e = parse_npy(&npy("<c16", "(1, 1)", &[0; 16])).unwrap_err();
-        assert!(e.contains("dtype"), "{e}");
+        assert_eq!(
+            e,
+            "truncated data: shape (2, 2) of '<f8' needs 32 bytes, the array holds 8"
+        );
+        let e = parse_npy(&npy("<f8", "(1000000, 1000000)", &[0; 8])).unwrap_err();
+        assert!(
+            e.starts_with("truncated data: the shape claims 1000000000000 elements"),
+            "{e}"
+        );
+        for shape in [
+            "(4294967296, 4294967296)",
+            "(0, 4294967296, 4294967296)",
+            "(4294967296, 4294967296, 0)",
+            "(18446744073709551615, 2)",
+        ] {
+            let e = parse_npy(&npy("<f8", shape, &[0; 8])).unwrap_err();
+            assert!(e.contains("overflow"), "{shape}: {e}");
+        }
+        let e = parse_npy(&npy("<f8", "(18446744073709551616, 1)", &[])).unwrap_err();
+        assert!(e.contains("bad dimension"), "{e}");
+        let e = parse_npy(&npy("<f8", "(-1, 2)", &[])).unwrap_err();
+        assert!(e.contains("bad dimension -1"), "{e}");
+        // 2 elements of 8 bytes each in 15 bytes: the count fits, the byte count does not.
+        let e = parse_npy(&npy("<f8", "(1, 2)", &[0; 15])).unwrap_err();
+        assert!(e.contains("needs 16 bytes"), "{e}");
+        // Deep nesting and malformed headers are errors, not stack overflows or panics.
+        let deep = format!(
+            "{{'descr': {}'<f8'{}, }}",
+            "[".repeat(2000),
+            "]".repeat(2000)
+        );
+        let mut bad = b"\x93NUMPY\x01\x00".to_vec();
+        bad.extend((deep.len() as u16).to_le_bytes());
+        bad.extend(deep.as_bytes());
+        assert!(parse_npy(&bad).unwrap_err().contains("nests 2000 brackets"));
+        for header in [
+            "{",
+            "{'descr': '<f8'}",
+            "{'descr': '<f8', 'fortran_order': 3, 'shape': (1, 1)}",
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (1.5, 1)}",
+            "[1, 2]",
+            "\u{1}",
+        ] {
+            let mut bad = b"\x93NUMPY\x01\x00".to_vec();
+            bad.extend((header.len() as u16).to_le_bytes());
+            bad.extend(header.as_bytes());
+            bad.extend([0; 16]);
+            assert!(parse_npy(&bad).is_err(), "{header}");
+        }
+    }
+
+    #[test]
+    fn every_truncation_and_byte_flip_of_a_valid_array_is_an_error_or_an_array() {
+        // A cheap stand-in for fuzzing: no prefix and no single-byte change may panic.
+        let good = npy_with(
+            2,
+            ">i4",
+            "False",
+            "(2, 3)",
+            &bytes(&[1i32, 2, 3, 4, 5, 6], i32::to_be_bytes),
+        );
+        for n in 0..good.len() {
+            let _ = parse_npy(&good[..n]);
+        }
+        for i in 0..good.len() {
+            for v in [0u8, 1, b'(', b')', b'9', b'[', 0x7f, 0xff] {
+                let mut b = good.clone();
+                b[i] = v;
+                let _ = parse_npy(&b);
+            }
+        }
     }
 }
