@@ -89,8 +89,7 @@ fn to_srgb8<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let p = picture(&rgba, None)?;
     let (h, w) = (p.height, p.width);
-    let bytes = py
-        .detach(|| guarded("write_image", || files::to_srgb8(&p, opaque)))?;
+    let bytes = py.detach(|| guarded("write_image", || files::to_srgb8(&p, opaque)))?;
     let channels = if opaque { 3 } else { 4 };
     Ok(numpy::PyArray1::from_vec(py, bytes)
         .reshape([h, w, channels])?

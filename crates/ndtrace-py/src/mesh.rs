@@ -67,8 +67,7 @@ fn orient_flips<'py>(
     let dim = vertices.shape()[1];
     let v = rows(&vertices).map_err(pyo3::exceptions::PyValueError::new_err)?;
     let s = rows(&simplices).map_err(pyo3::exceptions::PyValueError::new_err)?;
-    let flips = py
-        .detach(|| guarded("mesh.orient", || orientation::orient_rows(dim, &v, &s)))?;
+    let flips = py.detach(|| guarded("mesh.orient", || orientation::orient_rows(dim, &v, &s)))?;
     Ok(PyArray1::from_vec(py, flips))
 }
 

@@ -262,8 +262,11 @@ fn load_file(
     reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
     let reader = PyMeshReader::new(reader);
-    let (desc, scene) = py
-        .detach(|| guarded("load_file", || scene::load_file_with(&path, as_reader(&reader))))?;
+    let (desc, scene) = py.detach(|| {
+        guarded("load_file", || {
+            scene::load_file_with(&path, as_reader(&reader))
+        })
+    })?;
     Ok(CompiledScene { desc, scene })
 }
 
@@ -278,12 +281,11 @@ fn load_toml(
     reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
     let reader = PyMeshReader::new(reader);
-    let (desc, scene) = py
-        .detach(|| {
-            guarded("load_toml", || {
-                scene::load_toml_with(text, name, base.as_deref(), as_reader(&reader))
-            })
-        })?;
+    let (desc, scene) = py.detach(|| {
+        guarded("load_toml", || {
+            scene::load_toml_with(text, name, base.as_deref(), as_reader(&reader))
+        })
+    })?;
     Ok(CompiledScene { desc, scene })
 }
 
@@ -307,12 +309,11 @@ fn load_dict(
             message: e.message,
         })
     })?;
-    let scene = py
-        .detach(|| {
-            guarded("load_dict", || {
-                scene::build_desc_with(&desc, name, base.as_deref(), as_reader(&reader))
-            })
-        })?;
+    let scene = py.detach(|| {
+        guarded("load_dict", || {
+            scene::build_desc_with(&desc, name, base.as_deref(), as_reader(&reader))
+        })
+    })?;
     Ok(CompiledScene { desc, scene })
 }
 

@@ -212,9 +212,10 @@ pub fn write_retina_exr(path: &Path, r: &Retina, camera: Option<&str>) -> NdResu
         .to_buffered(&mut bytes)
         .map_err(|e| file_err(path, format!("cannot write: {e}")))?;
     let mut bytes = bytes.into_inner();
-    sort_header_attributes(&mut bytes)
-        .map_err(|e| file_err(path, format!("cannot write: {e}")))?;
-    write_atomically(path, |tmp| std::fs::write(tmp, &bytes).map_err(|e| e.to_string()))
+    sort_header_attributes(&mut bytes).map_err(|e| file_err(path, format!("cannot write: {e}")))?;
+    write_atomically(path, |tmp| {
+        std::fs::write(tmp, &bytes).map_err(|e| e.to_string())
+    })
 }
 
 /// Checks a retina's arrays against its dimension and shape and against each other (the
@@ -263,7 +264,10 @@ pub fn check_retina(r: &Retina) -> NdResult<()> {
     if let Some(i) = r.object_id.iter().position(|&o| o < -1 || o == i32::MAX) {
         return Err(value(
             "object_id",
-            format!("{} at cell {i} is not an object index or -1", r.object_id[i]),
+            format!(
+                "{} at cell {i} is not an object index or -1",
+                r.object_id[i]
+            ),
         ));
     }
     if let Some(i) = r.primitive_id.iter().position(|&p| p < -1 || p == i64::MAX) {
@@ -392,8 +396,7 @@ fn check_exr_header(bytes: &[u8], path: &Path) -> NdResult<()> {
         ));
     }
     // f32 samples in the crate's buffers (f16 widen to f32 in ours), then our copy.
-    crate::memory::check(total as f64 * 4.0, "reading its samples")
-        .map_err(|e| file_err(path, e))
+    crate::memory::check(total as f64 * 4.0, "reading its samples").map_err(|e| file_err(path, e))
 }
 
 /// [`read_exr`] of a file's bytes already in memory; `path` names it in errors.
@@ -505,7 +508,11 @@ pub fn read_exr_bytes(bytes: &[u8], path: &Path) -> NdResult<ExrContents> {
             );
             // Subsampled channels hold fewer samples than the part has pixels.
             let n = w * h;
-            if rgba.iter().chain(&normals).chain([&z]).any(|c| c.len() != n)
+            if rgba
+                .iter()
+                .chain(&normals)
+                .chain([&z])
+                .any(|c| c.len() != n)
                 || [&oid, &lo, &hi].iter().any(|c| c.len() != n)
             {
                 return Err(file_err(path, "a retina channel is subsampled"));
@@ -516,9 +523,8 @@ pub fn read_exr_bytes(bytes: &[u8], path: &Path) -> NdResult<ExrContents> {
                 r.normal.extend((0..dim).map(|a| normals[a][i]));
                 // Ids are stored plus one (0 = miss): objectId up to 2^31, primitiveId up to
                 // 2^63, so that they come back as i32 and i64.
-                let object = i32::try_from(i64::from(oid[i]) - 1).map_err(|_| {
-                    file_err(path, format!("objectId {} is out of range", oid[i]))
-                })?;
+                let object = i32::try_from(i64::from(oid[i]) - 1)
+                    .map_err(|_| file_err(path, format!("objectId {} is out of range", oid[i])))?;
                 let pid = (hi[i] as u64) << 32 | lo[i] as u64;
                 let primitive = i64::try_from(pid as i128 - 1)
                     .map_err(|_| file_err(path, format!("primitiveId {pid} is out of range")))?;

@@ -225,7 +225,10 @@ mod tests {
         assert_eq!(soft_limit(limits, "Max address space"), Some(4 << 30));
         assert_eq!(soft_limit(limits, "Max data size"), None);
         assert_eq!(soft_limit(limits, "Max stack size"), None);
-        assert_eq!(status_kib("VmSize:\t  123 kB\nVmData: 7 kB", "VmData:"), Some(7));
+        assert_eq!(
+            status_kib("VmSize:\t  123 kB\nVmData: 7 kB", "VmData:"),
+            Some(7)
+        );
     }
 
     #[test]

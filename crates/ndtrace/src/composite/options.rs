@@ -300,7 +300,10 @@ fn finite(key: &str, v: f64) -> Result<f64, OptionError> {
     } else if v.abs() > f32::MAX as f64 {
         Err(bad(
             key,
-            format!("{v} overflows float32 (at most {:e} in magnitude)", f32::MAX),
+            format!(
+                "{v} overflows float32 (at most {:e} in magnitude)",
+                f32::MAX
+            ),
         ))
     } else {
         Ok(v)
