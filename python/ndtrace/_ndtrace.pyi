@@ -10,6 +10,11 @@ __version__: str
 MIN_DIM: int
 MAX_DIM: int
 
+class InternalError(RuntimeError):
+    """A bug in ndtrace: the core panicked on an input its checks let through."""
+
+def internal_errors() -> int: ...
+
 _F = npt.NDArray[np.float64]
 
 class _GeometryKernels(ModuleType):

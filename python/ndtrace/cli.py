@@ -20,6 +20,7 @@ import argparse
 import copy
 import os
 import runpy
+import signal
 import sys
 import time
 import tomllib
@@ -38,6 +39,20 @@ COMPOSITES: tuple[str, ...] = tuple(_ndtrace.COMPOSITE_MODES)  # composite.mode
 
 class UsageError(Exception):
     """A problem with the command line or the scene: one line, exit status 2."""
+
+
+#: ``--threads`` is capped at this many threads per core: more only costs memory and start-up.
+THREADS_PER_CORE = 4
+
+
+def max_threads() -> int:
+    """The most worker threads ``--threads`` may ask for."""
+    return THREADS_PER_CORE * (os.cpu_count() or 1)
+
+
+def _terminate(signum, _frame):
+    """SIGTERM and SIGHUP stop the work as Ctrl-C does (partial outputs removed)."""
+    raise KeyboardInterrupt(signal.Signals(signum).name)
 
 
 class Progress:
@@ -235,16 +250,41 @@ def _load(path: str) -> Scene:
     if path.endswith(".toml"):
         return load_file(path)
     if path.endswith(".py"):
-        namespace = runpy.run_path(path)
+        namespace = _run_script(path, lambda: runpy.run_path(path), "running the script")
         make = namespace.get("scene")
         if not callable(make):
             raise UsageError(f"{path}: a scene script must define scene() returning an ndtrace.Scene")
-        scene = make()
+        scene = _run_script(path, make, "scene()")
         if not isinstance(scene, Scene):
             raise UsageError(f"{path}: scene() returned {type(scene).__name__}, not an ndtrace.Scene")
         scene.compiled()  # validate now
         return scene
     raise UsageError(f"{path}: unknown scene type: expected a .toml or .py file")
+
+
+class ScriptError(UsageError):
+    """A ``.py`` scene that does not run: one line naming the script, the line and the error."""
+
+
+def _run_script(path: str, call, what: str):
+    """``call()``, with an exception of the user's script turned into one line naming the
+    script (and its line): a syntax error, an exception or infinite recursion, or
+    ``sys.exit`` (a script that exits has produced no scene)."""
+    try:
+        return call()
+    except SyntaxError as e:
+        where = f"{e.filename or path}:{e.lineno}" + (f":{e.offset}" if e.offset else "")
+        raise ScriptError(f"{where}: syntax error: {e.msg}") from e
+    except SystemExit as e:
+        raise ScriptError(f"{path}: {what} called sys.exit({e.code!r}) instead of returning a "
+                          "scene") from e
+    except UsageError:
+        raise
+    except Exception as e:
+        frames = [f for f in traceback.extract_tb(e.__traceback__)
+                  if os.path.abspath(f.filename) == os.path.abspath(path)]
+        where = f"{path}:{frames[-1].lineno}" if frames else path
+        raise ScriptError(f"{where}: {what} raised {type(e).__name__}: {e}") from e
 
 
 def _check_output(path: str, exts: tuple[str, ...], option: str) -> None:
@@ -272,8 +312,23 @@ def run(argv: list[str] | None = None) -> int:
         raise UsageError("--retina: a retina is written for a still, not for an animation")
     if args.retina:
         _check_output(args.retina, (".exr",), "--retina")
+        if os.path.realpath(args.retina) == os.path.realpath(args.output):
+            raise UsageError(f"--retina {args.retina}: the same file as -o {args.output}; "
+                             "give the two outputs different names")
+    if os.path.realpath(args.scene) in (os.path.realpath(args.output),
+                                         os.path.realpath(args.retina or args.output)):
+        raise UsageError(f"{args.scene}: an output would overwrite the scene file")
     if args.threads is not None and args.threads < 1:
         raise UsageError(f"--threads: must be at least 1, got {args.threads}")
+    if args.threads is not None and args.threads > max_threads():
+        if not args.quiet:
+            print(f"ndtrace: --threads {args.threads} capped at {max_threads()} "
+                  f"({THREADS_PER_CORE} per core on {os.cpu_count() or 1} cores)", file=sys.stderr)
+        args.threads = max_threads()
+    for name in ("samples", "seed", "frames"):
+        value = getattr(args, name)
+        if value is not None and not 0 <= value < 2**32:
+            raise UsageError(f"--{name}: must be in 0..{2**32 - 1}, got {value}")
     scene = _load(args.scene)
     scene = _apply_sets(scene, args.set, scene._base or os.path.dirname(os.path.abspath(args.scene)))
     data = scene.to_dict()
@@ -336,11 +391,15 @@ def main(argv: list[str] | None = None) -> None:
 
         sys.exit(view(given[1:]))
     debug = "--debug" in given
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, _terminate)
     try:
         code = run(argv)
-    except KeyboardInterrupt:
-        sys.stderr.write("\nndtrace: interrupted\n")
-        code = 130
+    except KeyboardInterrupt as e:
+        name = str(e)
+        sys.stderr.write(f"\nndtrace: {'terminated by ' + name if name else 'interrupted'}\n")
+        # 128 + the signal's number, as a shell reports a process that a signal stopped.
+        code = 128 + (signal.Signals[name].value if name.startswith("SIG") else signal.SIGINT)
     except (UsageError, ValueError, OSError) as e:
         if debug:
             traceback.print_exc()

@@ -27,6 +27,11 @@ def _array(name: str, value) -> np.ndarray:
     if a.dtype == object or not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)
                                  or a.dtype == np.bool_):
         raise ValueError(f"{name}: expected a real numeric array, got dtype {a.dtype}")
+    if a.dtype.kind == "f" and a.dtype.itemsize > 4:
+        # Values beyond float32's range would become inf in the cast (NaN pictures).
+        big = np.flatnonzero(np.isfinite(a) & (np.abs(a.astype(np.float64)) > np.finfo(np.float32).max))
+        if big.size:
+            raise ValueError(f"{name}: value {a.flat[big[0]]} at index {big[0]} overflows float32")
     return np.ascontiguousarray(a, dtype=np.float32)
 
 

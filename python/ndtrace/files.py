@@ -7,6 +7,7 @@ write never leaves a broken file where a good one was.
 
 from __future__ import annotations
 
+import numbers
 import os
 import tempfile
 
@@ -49,6 +50,10 @@ def write_exr(path: str | os.PathLike, image_or_retina, *, depth=None) -> None:
     _check_ext(path, _EXTS, "an OpenEXR file")
     if isinstance(image_or_retina, Retina):
         r = image_or_retina
+        if isinstance(r.dim, bool) or not isinstance(r.dim, numbers.Integral) or not (
+                _ndtrace.MIN_DIM <= r.dim <= _ndtrace.MAX_DIM):
+            raise ValueError(f"retina.dim: expected an integer in {_ndtrace.MIN_DIM}..{_ndtrace.MAX_DIM}, "
+                             f"got {r.dim!r}")
         c = np.ascontiguousarray
         _ndtrace.write_retina_exr(
             path, r.dim, list(r.shape), c(r.rgba, np.float32), c(r.depth, np.float32),

@@ -124,8 +124,8 @@ def _positive(name: str, value) -> float:
 
 
 def _count(name: str, value, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
-        raise ValueError(f"{name}: expected an integer ≥ {low}, got {value!r}")
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not low <= value < 2**32:
+        raise ValueError(f"{name}: expected an integer in {low}..{2**32 - 1}, got {value!r}")
     return int(value)
 
 

@@ -112,6 +112,8 @@ def _axis(name: str, value) -> int:
     i = _int(name, value)
     if i < 0:
         raise ValueError(f"{name}: expected an axis number ≥ 0 (axes count from 0), got {i}")
+    if i >= _ndtrace.MAX_DIM:
+        raise ValueError(f"{name}: axis {i} is out of range: N ≤ {_ndtrace.MAX_DIM}, axes 0..N−1")
     return i
 
 

@@ -33,16 +33,25 @@ from .mesh import _scene_reader, from_object
 __all__ = ["Scene", "load_file", "load_dict", "load_toml"]
 
 
-def _plain(value: Any) -> Any:
-    """Nested numpy arrays and scalars → lists and Python numbers (for the Rust loader)."""
+#: Deeper nesting than any scene has (a list of rows of numbers is three levels).
+MAX_DEPTH = 32
+
+
+def _plain(value: Any, path: str = "", depth: int = 0) -> Any:
+    """Nested numpy arrays and scalars → lists and Python numbers (for the Rust loader).
+    A container nested deeper than :data:`MAX_DEPTH` (one that contains itself, say) is a
+    ValueError naming where."""
+    if depth > MAX_DEPTH:
+        raise ValueError(f"{path or 'the scene'}: nested more than {MAX_DEPTH} levels deep "
+                         "(a list or dict that contains itself?)")
     if isinstance(value, np.ndarray):
         return value.tolist()
     if isinstance(value, np.generic):
         return value.item()
     if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
+        return {k: _plain(v, f"{path}.{k}" if path else str(k), depth + 1) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
+        return [_plain(v, f"{path}[{i}]", depth + 1) for i, v in enumerate(value)]
     return value
 
 

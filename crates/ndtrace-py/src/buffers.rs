@@ -2,7 +2,7 @@
 //! `ndtrace.geometry` and `ndtrace.rotation` kernels: C-contiguous arrays in, a flat array out
 //! (reshaped by the Python wrapper).
 
-use crate::errors::to_py_err;
+use crate::errors::guarded;
 use ndtrace::NdResult;
 use numpy::{PyArray1, PyReadonlyArrayDyn};
 use pyo3::exceptions::PyValueError;
@@ -26,6 +26,14 @@ where
     F: FnOnce(&mut [f64]) -> NdResult<()> + Send,
 {
     let mut out = vec![0.0; len];
-    py.detach(|| f(&mut out)).map_err(to_py_err)?;
+    // The closure's type names the kernel: `_ndtrace::geometry::signed_volume::{{closure}}`.
+    let name = std::any::type_name::<F>();
+    let op = name
+        .trim_start_matches("_ndtrace::")
+        .split("::{{")
+        .next()
+        .unwrap_or(name)
+        .replace("::", ".");
+    py.detach(|| guarded(&op, || f(&mut out)))?;
     Ok(PyArray1::from_vec(py, out))
 }

@@ -4,7 +4,7 @@
 //! defaults and range checks are the core's; the Python wrapper `ndtrace.composite` documents
 //! them.
 
-use crate::errors::to_py_err;
+use crate::errors::{guarded, to_py_err};
 use ndtrace::composite::{self as core, CompositeMode, CompositeOptions, Projection};
 use ndtrace::scene::{self, PathError};
 use ndtrace::{names, NdError};
@@ -71,12 +71,12 @@ fn composite<'py>(
     };
     let pool = crate::thread_pool(threads)?;
     let run = || core::composite(rgba, depth, &shape, &opts);
-    let image = py
-        .detach(|| match &pool {
+    let image = py.detach(|| {
+        guarded("composite", || match &pool {
             Some(p) => p.install(run),
             None => run(),
         })
-        .map_err(to_py_err)?;
+    })?;
     Ok(PyArray1::from_vec(py, image.rgba)
         .reshape([image.height, image.width, 4])?
         .into_any())

@@ -1,7 +1,7 @@
 //! Kernels behind `ndtrace.write_exr`, `ndtrace.read_exr` and the 8-bit pictures of
 //! `ndtrace.write_image` (which Pillow writes).
 
-use crate::errors::to_py_err;
+use crate::errors::guarded;
 use ndtrace::files::{self, ExrContents, Picture};
 use ndtrace::render::Retina;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
@@ -41,8 +41,11 @@ fn write_retina_exr(
         object_id: vec_of(&object_id, "object_id")?,
         primitive_id: vec_of(&primitive_id, "primitive_id")?,
     };
-    py.detach(|| files::write_retina_exr(&path, &r, camera.as_deref()))
-        .map_err(to_py_err)
+    py.detach(|| {
+        guarded("write_exr", || {
+            files::write_retina_exr(&path, &r, camera.as_deref())
+        })
+    })
 }
 
 fn picture(
@@ -73,8 +76,7 @@ fn write_picture_exr(
     depth: Option<PyReadonlyArrayDyn<'_, f32>>,
 ) -> PyResult<()> {
     let p = picture(&rgba, depth.as_ref())?;
-    py.detach(|| files::write_picture_exr(&path, &p))
-        .map_err(to_py_err)
+    py.detach(|| guarded("write_exr", || files::write_picture_exr(&path, &p)))
 }
 
 /// A picture (H, W, 4) as 8-bit sRGB: (H, W, 4) with straight alpha, or (H, W, 3) opaque.
@@ -87,9 +89,7 @@ fn to_srgb8<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let p = picture(&rgba, None)?;
     let (h, w) = (p.height, p.width);
-    let bytes = py
-        .detach(|| files::to_srgb8(&p, opaque))
-        .map_err(to_py_err)?;
+    let bytes = py.detach(|| guarded("write_image", || files::to_srgb8(&p, opaque)))?;
     let channels = if opaque { 3 } else { 4 };
     Ok(numpy::PyArray1::from_vec(py, bytes)
         .reshape([h, w, channels])?
@@ -100,7 +100,7 @@ fn to_srgb8<'py>(
 /// "picture" (`rgba` (H, W, 4) and optional `depth`).
 #[pyfunction]
 fn read_exr(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict>> {
-    let contents = py.detach(|| files::read_exr(&path)).map_err(to_py_err)?;
+    let contents = py.detach(|| guarded("read_exr", || files::read_exr(&path)))?;
     let d = PyDict::new(py);
     match contents {
         ExrContents::Retina(r, camera) => {

@@ -39,6 +39,7 @@ fn _ndtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("MIN_DIM", ndtrace::MIN_DIM)?;
     m.add("MAX_DIM", ndtrace::MAX_DIM)?;
+    errors::register(m)?;
     geometry::register(m)?;
     rotation::register(m)?;
     scene::register(m)?;

@@ -2,7 +2,7 @@
 //! behind it, reading the mesh files the core does not read itself) and the kernel behind
 //! `ndtrace.mesh.orient`.
 
-use crate::errors::to_py_err;
+use crate::errors::guarded;
 use ndtrace::mesh::orientation;
 use ndtrace::scene::npz::Array2;
 use ndtrace::scene::MeshReader;
@@ -67,9 +67,7 @@ fn orient_flips<'py>(
     let dim = vertices.shape()[1];
     let v = rows(&vertices).map_err(pyo3::exceptions::PyValueError::new_err)?;
     let s = rows(&simplices).map_err(pyo3::exceptions::PyValueError::new_err)?;
-    let flips = py
-        .detach(|| orientation::orient_rows(dim, &v, &s))
-        .map_err(to_py_err)?;
+    let flips = py.detach(|| guarded("mesh.orient", || orientation::orient_rows(dim, &v, &s)))?;
     Ok(PyArray1::from_vec(py, flips))
 }
 

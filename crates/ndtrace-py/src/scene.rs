@@ -1,7 +1,7 @@
 //! Scenes and tracing: `_ndtrace.load_file`, `_ndtrace.load_dict`, and the `CompiledScene`
 //! class (a validated description plus its built, traceable scene and BVH).
 
-use crate::errors::to_py_err;
+use crate::errors::{guarded, to_py_err};
 use crate::mesh::PyMeshReader;
 use ndtrace::render::pool;
 use ndtrace::render::{self, Progress, Retina};
@@ -81,7 +81,9 @@ impl CompiledScene {
     /// The description of frame `k` of the scene's `[animation]` as plain Python data: the
     /// scene with that frame's rotation applied to the animation's target, without the table.
     fn animation_frame<'py>(&self, py: Python<'py>, k: u32) -> PyResult<Bound<'py, PyAny>> {
-        let frame = scene::animation_frame(&self.desc, k, "<scene>").map_err(to_py_err)?;
+        let frame = guarded("animation_frame", || {
+            scene::animation_frame(&self.desc, k, "<scene>")
+        })?;
         pythonize::pythonize(py, &frame).map_err(|e| PyValueError::new_err(e.to_string()))
     }
 
@@ -109,10 +111,10 @@ impl CompiledScene {
         let result = std::thread::scope(|sc| {
             let (done_tx, done_rx) = std::sync::mpsc::channel::<()>();
             let handle = sc.spawn(move || {
-                let r = match &pool {
+                let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match &pool {
                     Some(p) => p.install(run),
                     None => run(),
-                };
+                }));
                 let _ = done_tx.send(());
                 r
             });
@@ -137,12 +139,18 @@ impl CompiledScene {
                     }
                 }
             }
-            handle.join().unwrap_or(Err(NdError::Cancelled))
+            handle.join()
         });
         if let Some(e) = interrupt {
             return Err(e);
         }
-        let retina = result.map_err(to_py_err)?;
+        // The thread catches the trace's panics itself (join's Err cannot happen then).
+        let retina = match result {
+            Ok(Ok(traced)) => traced.map_err(to_py_err)?,
+            Ok(Err(payload)) | Err(payload) => {
+                return Err(crate::errors::internal_error("trace", payload.as_ref()))
+            }
+        };
         if let Some(cb) = &callback {
             cb.call1((total, total))?;
         }
@@ -254,9 +262,11 @@ fn load_file(
     reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
     let reader = PyMeshReader::new(reader);
-    let (desc, scene) = py
-        .detach(|| scene::load_file_with(&path, as_reader(&reader)))
-        .map_err(to_py_err)?;
+    let (desc, scene) = py.detach(|| {
+        guarded("load_file", || {
+            scene::load_file_with(&path, as_reader(&reader))
+        })
+    })?;
     Ok(CompiledScene { desc, scene })
 }
 
@@ -271,9 +281,11 @@ fn load_toml(
     reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
     let reader = PyMeshReader::new(reader);
-    let (desc, scene) = py
-        .detach(|| scene::load_toml_with(text, name, base.as_deref(), as_reader(&reader)))
-        .map_err(to_py_err)?;
+    let (desc, scene) = py.detach(|| {
+        guarded("load_toml", || {
+            scene::load_toml_with(text, name, base.as_deref(), as_reader(&reader))
+        })
+    })?;
     Ok(CompiledScene { desc, scene })
 }
 
@@ -297,9 +309,11 @@ fn load_dict(
             message: e.message,
         })
     })?;
-    let scene = py
-        .detach(|| scene::build_desc_with(&desc, name, base.as_deref(), as_reader(&reader)))
-        .map_err(to_py_err)?;
+    let scene = py.detach(|| {
+        guarded("load_dict", || {
+            scene::build_desc_with(&desc, name, base.as_deref(), as_reader(&reader))
+        })
+    })?;
     Ok(CompiledScene { desc, scene })
 }
 

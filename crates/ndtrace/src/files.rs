@@ -94,11 +94,22 @@ fn f32_channel(name: &str, v: Vec<f32>) -> AnyChannel<FlatSamples> {
 
 /// Writes a 2D picture as one RGBA part (plus `Z`).
 pub fn write_picture_exr(path: &Path, p: &Picture) -> NdResult<()> {
-    let n = p.width * p.height;
-    if p.rgba.len() != n * 4 || p.width == 0 || p.height == 0 {
+    let n = p.width.checked_mul(p.height).unwrap_or(usize::MAX);
+    if n.checked_mul(4) != Some(p.rgba.len()) || p.width == 0 || p.height == 0 {
         return Err(NdError::Value {
             arg: "image".into(),
             message: format!("expected ({}, {}, 4) values", p.height, p.width),
+        });
+    }
+    if let Some(d) = p.depth.as_ref().filter(|d| d.len() != n) {
+        return Err(NdError::Value {
+            arg: "depth".into(),
+            message: format!(
+                "expected ({}, {}) values, got {}",
+                p.height,
+                p.width,
+                d.len()
+            ),
         });
     }
     let mut channels = vec![];
@@ -125,6 +136,7 @@ pub fn write_picture_exr(path: &Path, p: &Picture) -> NdResult<()> {
 
 /// Writes a retina (any N): one part per 2D slice for N ≥ 4, a single part for N ≤ 3.
 pub fn write_retina_exr(path: &Path, r: &Retina, camera: Option<&str>) -> NdResult<()> {
+    check_retina(r)?;
     let n = r.dim;
     let (w, h) = match r.shape.len() {
         1 => (r.shape[0], 1),
@@ -132,12 +144,7 @@ pub fn write_retina_exr(path: &Path, r: &Retina, camera: Option<&str>) -> NdResu
     };
     let per = w * h;
     let parts = r.depth.len() / per.max(1);
-    let shape_text = r
-        .shape
-        .iter()
-        .map(|s| s.to_string())
-        .collect::<Vec<_>>()
-        .join(",");
+    let shape_text = shape_text(&r.shape);
     let mut layers = vec![];
     for k in 0..parts {
         let cells = k * per..(k + 1) * per;
@@ -199,9 +206,137 @@ pub fn write_retina_exr(path: &Path, r: &Retina, camera: Option<&str>) -> NdResu
         ImageAttributes::new(IntegerBounds::from_dimensions((w, h))),
         layers,
     );
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| file_err(path, format!("cannot write: {e}")))?;
+    let mut bytes = bytes.into_inner();
+    sort_header_attributes(&mut bytes).map_err(|e| file_err(path, format!("cannot write: {e}")))?;
     write_atomically(path, |tmp| {
-        image.write().to_file(tmp).map_err(|e| e.to_string())
+        std::fs::write(tmp, &bytes).map_err(|e| e.to_string())
     })
+}
+
+/// Checks a retina's arrays against its dimension and shape and against each other (the
+/// Python bindings accept them from the user): every index the writer makes is then in range.
+pub fn check_retina(r: &Retina) -> NdResult<()> {
+    let value = |arg: &str, message: String| NdError::Value {
+        arg: arg.into(),
+        message,
+    };
+    if !(crate::MIN_DIM..=crate::MAX_DIM).contains(&r.dim) {
+        return Err(NdError::Dimension { dim: r.dim });
+    }
+    if r.shape.len() + 1 != r.dim || r.shape.contains(&0) {
+        return Err(value(
+            "shape",
+            format!(
+                "a retina of dimension {} has {} positive axes, got {:?}",
+                r.dim,
+                r.dim - 1,
+                r.shape
+            ),
+        ));
+    }
+    let cells = crate::memory::product(&r.shape)
+        .filter(|c| c.checked_mul(4.max(r.dim)).is_some())
+        .ok_or_else(|| value("shape", format!("{:?} has too many cells", r.shape)))?;
+    for (name, len, per) in [
+        ("rgba", r.rgba.len(), 4),
+        ("depth", r.depth.len(), 1),
+        ("normal", r.normal.len(), r.dim),
+        ("object_id", r.object_id.len(), 1),
+        ("primitive_id", r.primitive_id.len(), 1),
+    ] {
+        if len != cells * per {
+            return Err(value(
+                name,
+                format!(
+                    "holds {len} values, the retina's shape {:?} needs {} ({per} per cell)",
+                    r.shape,
+                    cells * per
+                ),
+            ));
+        }
+    }
+    // Ids are written plus one, 0 meaning a miss.
+    if let Some(i) = r.object_id.iter().position(|&o| o < -1 || o == i32::MAX) {
+        return Err(value(
+            "object_id",
+            format!(
+                "{} at cell {i} is not an object index or -1",
+                r.object_id[i]
+            ),
+        ));
+    }
+    if let Some(i) = r.primitive_id.iter().position(|&p| p < -1 || p == i64::MAX) {
+        return Err(value(
+            "primitive_id",
+            format!(
+                "{} at cell {i} is not a simplex index or -1",
+                r.primitive_id[i]
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Sorts the attributes of every header of an EXR file in memory by name, so that the same
+/// image always gives the same bytes: the `exr` crate writes a part's custom attributes in the
+/// order of a `HashMap`, which changes from run to run. The OpenEXR format lets attributes come
+/// in any order, and a header keeps its length, so the offset tables after it stay valid.
+fn sort_header_attributes(bytes: &mut [u8]) -> std::result::Result<(), String> {
+    const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+    const MULTIPART: u32 = 0x1000;
+    let bad = || "unexpected EXR header layout".to_string();
+    if bytes.len() < 8 || bytes[..4] != MAGIC {
+        return Err(bad());
+    }
+    let multipart = u32::from_le_bytes([bytes[4], bytes[5], bytes[6], bytes[7]]) & MULTIPART != 0;
+    let cstr_end = |b: &[u8], at: usize| -> std::result::Result<usize, String> {
+        b.get(at..)
+            .and_then(|t| t.iter().position(|&c| c == 0))
+            .map(|n| at + n + 1)
+            .ok_or_else(bad)
+    };
+    let mut at = 8;
+    loop {
+        // One header: attributes (name\0 type\0 size:i32 value) up to an empty name.
+        let start = at;
+        let mut attrs: Vec<std::ops::Range<usize>> = vec![];
+        while *bytes.get(at).ok_or_else(bad)? != 0 {
+            let name_end = cstr_end(bytes, at)?;
+            let type_end = cstr_end(bytes, name_end)?;
+            let size = bytes.get(type_end..type_end + 4).ok_or_else(bad)?;
+            let size = u32::from_le_bytes([size[0], size[1], size[2], size[3]]) as usize;
+            let end = type_end + 4 + size;
+            if end > bytes.len() {
+                return Err(bad());
+            }
+            attrs.push(at..end);
+            at = end;
+        }
+        let mut sorted: Vec<&[u8]> = attrs.iter().map(|r| &bytes[r.clone()]).collect();
+        // The name (up to its NUL) is a prefix of each attribute; names are unique.
+        sorted.sort();
+        let sorted = sorted.concat();
+        bytes[start..at].copy_from_slice(&sorted);
+        at += 1;
+        // A multi-part file ends its list of headers with one more empty name.
+        if !multipart || *bytes.get(at).ok_or_else(bad)? == 0 {
+            return Ok(());
+        }
+    }
+}
+
+/// "4,5,6": the `ndtrace.retinaShape` attribute.
+fn shape_text(shape: &[usize]) -> String {
+    shape
+        .iter()
+        .map(|s| s.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
 }
 
 fn channel<'a>(layer: &'a Layer<AnyChannels<FlatSamples>>, name: &str) -> Option<&'a FlatSamples> {
@@ -227,10 +362,57 @@ fn as_u32(s: &FlatSamples) -> Vec<u32> {
 /// Reads an EXR: a retina if it carries ndtrace's attributes, else a 2D RGBA picture (the
 /// first part; a missing `A` channel means opaque, a missing colour channel is an error).
 pub fn read_exr(path: &Path) -> NdResult<ExrContents> {
-    let image = exr::prelude::read_all_flat_layers_from_file(path).map_err(|e| match e {
-        exr::error::Error::Io(io) => file_err(path, format!("cannot read: {io}")),
-        other => file_err(path, format!("not a readable OpenEXR file: {other}")),
-    })?;
+    let bytes = std::fs::read(path).map_err(|e| file_err(path, format!("cannot read: {e}")))?;
+    read_exr_bytes(&bytes, path)
+}
+
+/// Checks an EXR's headers before the `exr` crate allocates every channel of every part at
+/// the size its header declares (a 600-byte file can declare 34 GB): the declared samples,
+/// counted with checked arithmetic, must fit the memory guard twice (the crate's buffers and
+/// the retina or picture built from them), and an uncompressed file must hold them.
+fn check_exr_header(bytes: &[u8], path: &Path) -> NdResult<()> {
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| file_err(path, format!("not a readable OpenEXR file: {e}")))?;
+    let mut total: u128 = 0;
+    let mut uncompressed = true;
+    for header in meta.headers.iter() {
+        let area = header.layer_size.width() as u128 * header.layer_size.height() as u128;
+        let per_pixel: u128 = header
+            .channels
+            .list
+            .iter()
+            .map(|c| c.sample_type.bytes_per_sample() as u128)
+            .sum();
+        total = total.saturating_add(area.saturating_mul(per_pixel));
+        uncompressed &= header.compression == Compression::Uncompressed;
+    }
+    if uncompressed && total > bytes.len() as u128 {
+        return Err(file_err(
+            path,
+            format!(
+                "not a readable OpenEXR file: its headers declare {total} bytes of uncompressed samples, the file has {}",
+                bytes.len()
+            ),
+        ));
+    }
+    // f32 samples in the crate's buffers (f16 widen to f32 in ours), then our copy.
+    crate::memory::check(total as f64 * 4.0, "reading its samples").map_err(|e| file_err(path, e))
+}
+
+/// [`read_exr`] of a file's bytes already in memory; `path` names it in errors.
+pub fn read_exr_bytes(bytes: &[u8], path: &Path) -> NdResult<ExrContents> {
+    check_exr_header(bytes, path)?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_buffered(std::io::Cursor::new(bytes))
+        .map_err(|e| match e {
+            exr::error::Error::Io(io) => file_err(path, format!("cannot read: {io}")),
+            other => file_err(path, format!("not a readable OpenEXR file: {other}")),
+        })?;
     let first = image
         .layer_data
         .first()
@@ -239,20 +421,52 @@ pub fn read_exr(path: &Path) -> NdResult<ExrContents> {
     if let (Some(AttributeValue::I32(dim)), Some(AttributeValue::Text(shape))) =
         (attr("ndtrace.dim"), attr("ndtrace.retinaShape"))
     {
-        let dim = *dim as usize;
+        let dim = usize::try_from(*dim)
+            .ok()
+            .filter(|d| (crate::MIN_DIM..=crate::MAX_DIM).contains(d))
+            .ok_or_else(|| file_err(path, format!("ndtrace.dim = {dim} is not in 2..=8")))?;
         let shape: Vec<usize> = shape
             .to_string()
             .split(',')
             .map(|s| s.trim().parse::<usize>())
             .collect::<std::result::Result<_, _>>()
             .map_err(|_| file_err(path, "bad ndtrace.retinaShape attribute"))?;
-        let cells: usize = shape.iter().product();
-        if shape.len() + 1 != dim || cells == 0 {
+        if shape.len() + 1 != dim || shape.contains(&0) {
             return Err(file_err(
                 path,
                 "ndtrace.retinaShape does not match ndtrace.dim",
             ));
         }
+        // The parts must tile the retina: each one R_1 × R_2 cells, one per leading index.
+        let (w, h) = match shape.len() {
+            1 => (shape[0], 1),
+            m => (shape[m - 1], shape[m - 2]),
+        };
+        let cells = crate::memory::product(&shape);
+        let parts = image.layer_data.len();
+        if cells != Some(w * h * parts)
+            || image
+                .layer_data
+                .iter()
+                .any(|l| (l.size.width(), l.size.height()) != (w, h))
+        {
+            return Err(file_err(
+                path,
+                format!(
+                    "ndtrace.retinaShape ({}) does not match its {parts} parts of {}",
+                    shape_text(&shape),
+                    image
+                        .layer_data
+                        .first()
+                        .map_or("no cells".into(), |l| format!(
+                            "{} × {} cells",
+                            l.size.width(),
+                            l.size.height()
+                        )),
+                ),
+            ));
+        }
+        let cells = w * h * parts;
         let camera = match attr("ndtrace.camera") {
             Some(AttributeValue::Text(t)) => Some(t.to_string()),
             _ => None,
@@ -292,23 +506,31 @@ pub fn read_exr(path: &Path) -> NdResult<ExrContents> {
                 as_u32(need("primitiveId.lo")?),
                 as_u32(need("primitiveId.hi")?),
             );
-            for i in 0..z.len() {
+            // Subsampled channels hold fewer samples than the part has pixels.
+            let n = w * h;
+            if rgba
+                .iter()
+                .chain(&normals)
+                .chain([&z])
+                .any(|c| c.len() != n)
+                || [&oid, &lo, &hi].iter().any(|c| c.len() != n)
+            {
+                return Err(file_err(path, "a retina channel is subsampled"));
+            }
+            for i in 0..n {
                 r.rgba.extend((0..4).map(|c| rgba[c][i]));
                 r.depth.push(z[i]);
                 r.normal.extend((0..dim).map(|a| normals[a][i]));
-                r.object_id.push(oid[i] as i32 - 1);
-                r.primitive_id
-                    .push(((hi[i] as u64) << 32 | lo[i] as u64) as i64 - 1);
+                // Ids are stored plus one (0 = miss): objectId up to 2^31, primitiveId up to
+                // 2^63, so that they come back as i32 and i64.
+                let object = i32::try_from(i64::from(oid[i]) - 1)
+                    .map_err(|_| file_err(path, format!("objectId {} is out of range", oid[i])))?;
+                let pid = (hi[i] as u64) << 32 | lo[i] as u64;
+                let primitive = i64::try_from(pid as i128 - 1)
+                    .map_err(|_| file_err(path, format!("primitiveId {pid} is out of range")))?;
+                r.object_id.push(object);
+                r.primitive_id.push(primitive);
             }
-        }
-        if r.depth.len() != cells {
-            return Err(file_err(
-                path,
-                format!(
-                    "the parts hold {} cells, the retina shape needs {cells}",
-                    r.depth.len()
-                ),
-            ));
         }
         return Ok(ExrContents::Retina(r, camera));
     }
@@ -481,6 +703,92 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("does not exist"), "{e}");
+    }
+
+    #[test]
+    fn retina_files_are_the_same_bytes_every_time() {
+        // Each write builds new attribute maps (new hash seeds): without sorting, the custom
+        // attributes of a part come out in a different order most times.
+        let dir = std::env::temp_dir().join(format!("ndtrace-bytes-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let r = retina(5, vec![2, 2, 3, 4]);
+        let bytes: Vec<Vec<u8>> = (0..6)
+            .map(|k| {
+                let path = dir.join(format!("r{k}.exr"));
+                write_retina_exr(&path, &r, Some("camera")).unwrap();
+                std::fs::read(&path).unwrap()
+            })
+            .collect();
+        assert!(bytes.iter().all(|b| b == &bytes[0]));
+        // Sorting keeps a valid file: it reads back as written.
+        match read_exr_bytes(&bytes[0], Path::new("r.exr")).unwrap() {
+            ExrContents::Retina(back, _) => assert_eq!(back, r),
+            other => panic!("{other:?}"),
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A picture file whose data and display windows are patched to (0, 0)–(x_max, y_max).
+    fn lying_picture(x_max: i32, y_max: i32) -> Vec<u8> {
+        let path = std::env::temp_dir().join(format!("ndtrace-lie-{}.exr", std::process::id()));
+        let p = Picture {
+            width: 4,
+            height: 5,
+            rgba: vec![0.25; 80],
+            depth: None,
+        };
+        write_picture_exr(&path, &p).unwrap();
+        let mut bytes = std::fs::read(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        for name in [&b"dataWindow\0box2i\0"[..], b"displayWindow\0box2i\0"] {
+            let at = bytes.windows(name.len()).position(|w| w == name).unwrap() + name.len() + 4;
+            for (k, v) in [0, 0, x_max, y_max].into_iter().enumerate() {
+                bytes[at + 4 * k..at + 4 * k + 4].copy_from_slice(&v.to_le_bytes());
+            }
+        }
+        bytes
+    }
+
+    #[test]
+    fn headers_are_checked_before_the_exr_crate_allocates() {
+        // 10^10 pixels of 4 f32 channels declared by a 0.4 KB file.
+        let e = read_exr_bytes(&lying_picture(99_999, 99_999), Path::new("lie.exr"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("lie.exr: reading its samples needs about 596.0 GiB of memory"),
+            "{e}"
+        );
+        // The real size still reads.
+        let ok = read_exr_bytes(&lying_picture(3, 4), Path::new("ok.exr")).unwrap();
+        assert!(matches!(ok, ExrContents::Picture(p) if p.width == 4 && p.height == 5));
+    }
+
+    #[test]
+    fn retinas_are_checked_before_they_are_written() {
+        let path = Path::new("/nonexistent/never-written.exr");
+        let check = |r: Retina| write_retina_exr(path, &r, None).unwrap_err().to_string();
+        let mut r = retina(4, vec![2, 3, 4]);
+        r.depth.pop();
+        assert_eq!(
+            check(r),
+            "depth: holds 23 values, the retina's shape [2, 3, 4] needs 24 (1 per cell)"
+        );
+        let mut r = retina(4, vec![2, 3, 4]);
+        r.dim = 5;
+        assert!(check(r).starts_with("shape: a retina of dimension 5 has 4 positive axes"));
+        let mut r = retina(3, vec![3, 4]);
+        r.object_id[5] = -2;
+        assert_eq!(
+            check(r),
+            "object_id: -2 at cell 5 is not an object index or -1"
+        );
+        let mut r = retina(3, vec![3, 4]);
+        r.shape = vec![usize::MAX / 2, 3];
+        assert!(check(r).contains("too many cells"));
+        let mut r = retina(3, vec![3, 4]);
+        r.dim = 0;
+        assert!(check(r).contains("dimension 0 is not supported"));
     }
 
     #[test]

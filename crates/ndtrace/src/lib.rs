@@ -30,6 +30,7 @@ pub mod error;
 pub mod files;
 pub mod geometry;
 pub mod linalg;
+pub mod memory;
 pub mod mesh;
 pub mod names;
 pub mod ray;

@@ -188,6 +188,20 @@ fn check_retina(rgba: &[f32], depth: Option<&[f32]>, shape: &[usize]) -> NdResul
             });
         }
     }
+    // NaN or infinite colours would make the whole picture NaN; depth is +inf on a miss.
+    let bad = |arg: &str, index: usize, value: f32| NdError::NonFinite {
+        arg: arg.into(),
+        index,
+        value: value as f64,
+    };
+    if let Some(i) = rgba.iter().position(|v| !v.is_finite()) {
+        return Err(bad("rgba", i, rgba[i]));
+    }
+    if let Some(d) = depth {
+        if let Some(i) = d.iter().position(|&v| v.is_nan() || v == f32::NEG_INFINITY) {
+            return Err(bad("depth", i, d[i]));
+        }
+    }
     Ok(cells)
 }
 
@@ -210,7 +224,8 @@ pub(super) fn prepare(
             }),
         _ => (0.0, 0.0),
     };
-    let span = if hi > lo { hi - lo } else { 1.0 };
+    // In f64: the span of depths near ±f32::MAX overflows f32.
+    let (lo, span) = (lo as f64, if hi > lo { hi as f64 - lo as f64 } else { 1.0 });
     let mut out = vec![[0f32; 4]; cells];
     out.par_chunks_mut(4096)
         .enumerate()
@@ -220,15 +235,17 @@ pub(super) fn prepare(
                 let a = rgba[i * 4 + 3];
                 let a2 = (a * opacity).clamp(0.0, 1.0);
                 let k = if a > 0.0 { a2 / a } else { 0.0 };
+                // A large opacity over a faint cell can scale its colour past f32::MAX.
+                let scaled = |x: f32| (x * k).clamp(-f32::MAX, f32::MAX);
                 let mut c = [
-                    rgba[i * 4] * k,
-                    rgba[i * 4 + 1] * k,
-                    rgba[i * 4 + 2] * k,
+                    scaled(rgba[i * 4]),
+                    scaled(rgba[i * 4 + 1]),
+                    scaled(rgba[i * 4 + 2]),
                     a2,
                 ];
                 if cue > 0.0 {
                     if let Some(d) = depth.map(|d| d[i]).filter(|d| d.is_finite()) {
-                        let t = ((d - lo) / span).clamp(0.0, 1.0);
+                        let t = ((d as f64 - lo) / span).clamp(0.0, 1.0) as f32;
                         for ch in 0..3 {
                             let tint = NEAR_TINT[ch] + (FAR_TINT[ch] - NEAR_TINT[ch]) * t;
                             c[ch] *= 1.0 - cue + cue * tint;

@@ -292,11 +292,21 @@ fn bad(key: &str, message: impl Into<String>) -> OptionError {
     }
 }
 
+/// `v` if it is finite and within float32's range (the compositor works in f32: a larger
+/// value would become infinite there and the picture NaN).
 fn finite(key: &str, v: f64) -> Result<f64, OptionError> {
-    if v.is_finite() {
-        Ok(v)
-    } else {
+    if !v.is_finite() {
         Err(bad(key, format!("must be finite, got {v}")))
+    } else if v.abs() > f32::MAX as f64 {
+        Err(bad(
+            key,
+            format!(
+                "{v} overflows float32 (at most {:e} in magnitude)",
+                f32::MAX
+            ),
+        ))
+    } else {
+        Ok(v)
     }
 }
 

@@ -274,17 +274,8 @@ fn camera<const N: usize>(c: &CameraDesc, samples: u32) -> R<Camera<N>> {
         None => format!("{cells:.3e}"),
     };
     let bytes = cells * retina_bytes_per_cell(N) as f64;
-    let available = available_memory();
-    if bytes > available as f64 / 2.0 {
-        return Err(PathError::new(
-            "camera.resolution",
-            format!(
-                "a retina of {cells_text} cells needs about {} of memory, more than this machine can spare ({} available)",
-                human_bytes(bytes),
-                human_bytes(available as f64)
-            ),
-        ));
-    }
+    crate::memory::check(bytes, &format!("a retina of {cells_text} cells"))
+        .map_err(|e| PathError::new("camera.resolution", e))?;
     let _ = samples;
     Ok(Camera {
         position,
@@ -295,36 +286,11 @@ fn camera<const N: usize>(c: &CameraDesc, samples: u32) -> R<Camera<N>> {
     })
 }
 
-/// Memory available to this process (MemAvailable on Linux, else 16 GiB).
-fn available_memory() -> u64 {
-    std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("MemAvailable:"))
-                .and_then(|l| {
-                    l.split_whitespace()
-                        .nth(1)
-                        .and_then(|k| k.parse::<u64>().ok())
-                })
-        })
-        .map(|kib| kib * 1024)
-        .unwrap_or(16 << 30)
-}
-
-fn human_bytes(b: f64) -> String {
-    let units = ["B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB", "ZiB", "YiB"];
-    let mut v = b;
-    let mut u = 0;
-    while v >= 1024.0 && u + 1 < units.len() {
-        v /= 1024.0;
-        u += 1;
-    }
-    if v >= 1024.0 {
-        format!("{b:.3e} B")
-    } else {
-        format!("{v:.1} {}", units[u])
-    }
+/// Bytes per simplex while the scene is built: its record (prepared matrix and origin, normal,
+/// bounds), the copies handed to the BVH and the BVH's leaf blocks.
+fn bvh_bytes_per_simplex(n: usize) -> f64 {
+    let prepared = ((n * n + n) * 8) as f64;
+    3.0 * prepared + (5 * n * 8 + 16) as f64
 }
 
 fn object_mesh<const N: usize>(
@@ -579,6 +545,11 @@ pub fn build_with<const N: usize>(
             ),
         ));
     }
+    crate::memory::check(
+        total as f64 * bvh_bytes_per_simplex(N),
+        &format!("the BVH of {total} simplices"),
+    )
+    .map_err(|e| PathError::new("objects", e))?;
     let per_object: Vec<Vec<PrimRecord<N>>> = objects
         .iter()
         .zip(&offsets)

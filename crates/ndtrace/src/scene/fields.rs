@@ -89,6 +89,13 @@ pub(crate) fn mesh_from_rows<const N: usize>(
     vpath: &str,
     spath: &str,
 ) -> R<Mesh<N>> {
+    // The mesh's own arrays, before they are allocated (the BVH is counted once all
+    // objects are known).
+    crate::memory::check(
+        (nv as f64 * 8.0 + ns as f64 * 4.0) * N as f64,
+        &format!("a mesh of {nv} vertices and {ns} simplices"),
+    )
+    .map_err(|e| PathError::new(path, e))?;
     if let Some(i) = vertices.iter().position(|x| !x.is_finite()) {
         return Err(PathError::new(
             format!("{vpath}[{}][{}]", i / N, i % N),
@@ -115,6 +122,5 @@ pub(crate) fn mesh_from_rows<const N: usize>(
         }
         mesh.simplices.push(idx);
     }
-    let _ = path;
     Ok(mesh)
 }

@@ -47,15 +47,17 @@ pub(crate) fn read_mesh<const N: usize>(
         }
     };
     let [v, s] = arrays.map_err(|e| PathError::new(&fpath, e))?;
+    // Checked: a header may declare any number of rows.
+    let holds = |a: &Array2| a.shape.0.checked_mul(N) == Some(a.data.len());
     let shape_error =
         |message: String| PathError::new(&fpath, format!("{}: {message}", full.display()));
-    if v.shape.1 != N || v.data.len() != v.shape.0 * N {
+    if v.shape.1 != N || !holds(&v) {
         return Err(shape_error(format!(
             "array \"vertices\" has shape {:?}, expected (V, {N}) for a scene of dimension {N}",
             v.shape
         )));
     }
-    if s.shape.1 != N || s.data.len() != s.shape.0 * N {
+    if s.shape.1 != N || !holds(&s) {
         return Err(shape_error(format!(
             "array \"simplices\" has shape {:?}, expected (S, {N}) for a scene of dimension {N}",
             s.shape
