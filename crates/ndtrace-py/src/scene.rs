@@ -66,6 +66,18 @@ impl CompiledScene {
             .map_err(to_py_err)
     }
 
+    /// Every object's feature edges (crease angle `angle`, degrees) split into the pieces the
+    /// camera sees and those it does not: flat arrays for `ndtrace.edge_segments`.
+    fn edge_segments<'py>(&self, py: Python<'py>, angle: f64) -> PyResult<Bound<'py, PyDict>> {
+        let scene = &self.scene;
+        with_scene!(scene, s, _N => {
+            let segs = py
+                .detach(|| ndtrace::edges::edge_segments(s, angle))
+                .map_err(to_py_err)?;
+            crate::edges::segments_dict(py, &segs)
+        })
+    }
+
     /// The description as TOML.
     fn to_toml(&self) -> PyResult<String> {
         scene::to_toml(&self.desc).map_err(to_py_err)
