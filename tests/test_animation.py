@@ -89,7 +89,7 @@ def test_animate_writes_numbered_frames_and_a_looping_gif(tmp_path):
     assert [d for d, _ in calls] == sorted(d for d, _ in calls), "progress only grows"
     assert {k * cells for k in range(1, 6)} <= {d for d, _ in calls}
     frames = [np.asarray(Image.open(p)) for p in pngs]
-    assert all(f.shape == (48, 64, 4) for f in frames)
+    assert all(f.shape == (48, 64, 3) for f in frames), "frames are opaque, as the GIF shows them"
     assert any(not np.array_equal(frames[0], f) for f in frames[1:]), "the tesseract turns"
     gif = Image.open(tmp_path / "spin.gif")
     assert gif.n_frames == 5 and gif.size == (64, 48) and gif.info["loop"] == 0
@@ -99,7 +99,7 @@ def test_animate_writes_numbered_frames_and_a_looping_gif(tmp_path):
     still = ndtrace.load_dict({k: v for k, v in scene.to_dict().items() if k != "animation"})
     picture = ndtrace.composite(ndtrace.trace(still), **{**scene.to_dict()["composite"], "size": [64, 48],
                                                          "background": scene.to_dict()["background"]})
-    np.testing.assert_array_equal(frames[0], ndtrace.files.to_srgb8(picture))
+    np.testing.assert_array_equal(frames[0], ndtrace.files.to_srgb8(picture, opaque=True))
     # The GIF shows the opaque picture (its colour over the background).
     gif.seek(0)
     shown = np.asarray(gif.convert("RGB")).astype(int)
@@ -200,8 +200,13 @@ def test_ctrl_c_keeps_finished_frames_and_leaves_no_video(tmp_path, output):
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        ndtrace.animate(scene, tmp_path / output, composite={"size": [16, 16]}, progress=interrupt)
+        ndtrace.animate(scene, tmp_path / output, composite={"size": [16, 16]}, progress=interrupt,
+                        keep_frames=True)
     assert sorted(os.listdir(tmp_path)) == ["stop_0001.png", "stop_0002.png"]
+    with pytest.raises(KeyboardInterrupt):
+        ndtrace.animate(scene, tmp_path / ("again" + output[4:]), composite={"size": [16, 16]},
+                        progress=interrupt)
+    assert sorted(os.listdir(tmp_path)) == ["stop_0001.png", "stop_0002.png"]  # no video, no frames
 
 
 def test_the_animation_table_round_trips_through_toml():

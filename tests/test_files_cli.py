@@ -84,20 +84,91 @@ def test_pictures_round_trip_and_openexr_files_read_in_ndtrace(tmp_path):
     np.testing.assert_array_equal(back[..., 3], 1.0)
 
 
-def test_png_is_8_bit_srgb_with_straight_alpha(tmp_path):
+def read_image(path) -> tuple[str, np.ndarray]:
     from PIL import Image
 
+    with Image.open(path) as im:
+        return im.mode, np.asarray(im)
+
+
+def test_transparent_png_is_8_bit_srgb_with_straight_alpha(tmp_path):
     img = np.zeros((2, 3, 4), np.float32)
     img[0, 0] = [0.5, 0.5, 0.5, 1.0]  # linear 0.5 → sRGB 188
     img[0, 1] = [0.25, 0.0, 0.0, 0.5]  # premultiplied: straight red 0.5 at alpha 0.5
     p = tmp_path / "x.png"
-    ndtrace.write_png(p, img)
-    with Image.open(p) as im:
-        a = np.asarray(im.convert("RGBA"))
-    assert a.shape == (2, 3, 4)
+    ndtrace.write_png(p, img, transparent=True)
+    mode, a = read_image(p)
+    assert mode == "RGBA" and a.shape == (2, 3, 4)
     assert tuple(a[0, 0]) == (188, 188, 188, 255)
     assert tuple(a[0, 1]) == (188, 0, 0, 128)
     assert tuple(a[1, 2]) == (0, 0, 0, 0)
+    # By default the colour is written as it is, opaque: linear 0.25 → sRGB 137.
+    ndtrace.write_png(p, img)
+    mode, a = read_image(p)
+    assert mode == "RGB" and tuple(a[0, 0]) == (188, 188, 188) and tuple(a[0, 1]) == (137, 0, 0)
+
+
+def test_png_of_a_white_background_scene_is_white_around_the_object(tmp_path):
+    d = small_scene(3, res=16).to_dict()
+    d["background"] = [1.0, 1.0, 1.0]
+    scene = ndtrace.load_dict(d)
+    from ndtrace.composite import scene_options
+
+    picture = ndtrace.composite(ndtrace.trace(scene), **scene_options(d), size=(32, 32))
+    ndtrace.write_png(tmp_path / "w.png", picture)
+    _, a = read_image(tmp_path / "w.png")
+    assert a.shape == (32, 32, 3)
+    assert tuple(a[0, 0]) == (255, 255, 255) and tuple(a[-1, -1]) == (255, 255, 255)
+    assert a[16, 16].max() < 250  # the cube
+    p = cli("scenes/cube.toml", "-o", str(tmp_path / "c.png"), "--resolution", "16", "--size", "32x32",
+            "--set", "background=[1, 1, 1]", "--quiet")
+    assert p.returncode == 0, p.stderr
+    mode, a = read_image(tmp_path / "c.png")
+    assert mode == "RGB" and tuple(a[0, 0]) == (255, 255, 255)
+    p = cli("scenes/cube.toml", "-o", str(tmp_path / "t.png"), "--resolution", "16", "--size", "32x32",
+            "--set", "background=[1, 1, 1]", "--transparent", "--quiet")
+    assert p.returncode == 0, p.stderr
+    mode, t = read_image(tmp_path / "t.png")
+    assert mode == "RGBA" and tuple(t[0, 0]) == (0, 0, 0, 0) and t[16, 16, 3] == 255
+    np.testing.assert_array_equal(t[16, 16, :3], a[16, 16])  # the opaque cube, either way
+
+
+def test_uint8_images_are_written_unchanged_in_every_shape(tmp_path):
+    rng = np.random.default_rng(2)
+    for shape, mode in (((4, 5), "L"), ((4, 5, 3), "RGB"), ((4, 5, 4), "RGBA")):
+        img = rng.integers(0, 256, size=shape, dtype=np.uint8)
+        img.flat[0] = 128
+        for ext in (".png", ".tif", ".webp") if mode != "L" else (".png", ".tif"):
+            path = tmp_path / f"u{len(shape)}{ext}"
+            if ext == ".webp":
+                ndtrace.write_image(path, img, quality=100)
+                continue  # lossy: only readable
+            ndtrace.write_image(path, img)
+            got_mode, got = read_image(path)
+            assert got_mode == mode, ext
+            np.testing.assert_array_equal(got, img, err_msg=ext)
+    # Float grey and RGB pictures are linear and opaque.
+    ndtrace.write_png(tmp_path / "g.png", np.full((2, 2), 0.5))
+    assert read_image(tmp_path / "g.png")[0] == "L" and read_image(tmp_path / "g.png")[1][0, 0] == 188
+    ndtrace.write_png(tmp_path / "c.png", np.full((2, 2, 3), [1.0, 0.0, 0.5]))
+    assert tuple(read_image(tmp_path / "c.png")[1][1, 1]) == (255, 0, 188)
+
+
+def test_jpeg_output(tmp_path):
+    p = cli("scenes/cube.toml", "-o", str(tmp_path / "c.jpg"), "--resolution", "16", "--size", "40x30",
+            "--quiet")
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "c.jpg").read_bytes()[:3] == b"\xff\xd8\xff"
+    mode, a = read_image(tmp_path / "c.jpg")
+    assert mode == "RGB" and a.shape == (30, 40, 3)
+    png = cli("scenes/cube.toml", "-o", str(tmp_path / "c.png"), "--resolution", "16", "--size", "40x30",
+              "--quiet")
+    assert png.returncode == 0
+    assert np.abs(a.astype(int) - read_image(tmp_path / "c.png")[1].astype(int)).mean() < 4
+    with pytest.raises(ValueError, match="JPEG has no alpha channel"):
+        ndtrace.write_image(tmp_path / "x.jpg", np.zeros((2, 2, 4)), transparent=True)
+    p = cli("scenes/cube.toml", "-o", str(tmp_path / "x.jpg"), "--transparent")
+    assert p.returncode == 2 and "--transparent" in p.stderr
 
 
 def test_bad_files_and_paths_are_clear_errors(tmp_path):
@@ -111,8 +182,10 @@ def test_bad_files_and_paths_are_clear_errors(tmp_path):
         ndtrace.write_exr(tmp_path / "x.tiff", np.zeros((2, 2, 4)))
     with pytest.raises(OSError, match="does not exist"):
         ndtrace.write_png(tmp_path / "nope" / "x.png", np.zeros((2, 2, 4)))
-    with pytest.raises(ValueError, match=r"image: expected an image of shape \(H, W, 4\)"):
-        ndtrace.write_png(tmp_path / "x.png", np.zeros((2, 2, 3)))
+    with pytest.raises(ValueError, match=r"image: expected an image of shape \(H, W\), \(H, W, 3\) or \(H, W, 4\)"):
+        ndtrace.write_png(tmp_path / "x.png", np.zeros((2, 2, 2)))
+    with pytest.raises(ValueError, match="unknown extension"):
+        ndtrace.write_image(tmp_path / "x.bmp", np.zeros((2, 2, 4)))
 
 
 def test_a_failed_write_leaves_the_old_file(tmp_path):
@@ -163,18 +236,20 @@ def test_cli_errors_are_one_line_with_exit_status_2(tmp_path):
     assert lines[0].startswith(f"ndtrace: error: {bad}:{line_no}:9: objects[0].shape: unknown shape "
                                '"hypercub" (did you mean "hypercube"?)'), lines[0]
     assert not (tmp_path / "x.png").exists()
-    p = cli("scenes/cube.toml", "-o", str(tmp_path / "x.jpg"))
+    p = cli("scenes/cube.toml", "-o", str(tmp_path / "x.bmp"))
     assert p.returncode == 2 and "unknown extension" in p.stderr and "Traceback" not in p.stderr
     p = cli("scenes/cube.toml", "-o", str(tmp_path / "no" / "x.png"))
     assert p.returncode == 2 and "does not exist" in p.stderr
     p = cli("scenes/missing.toml", "-o", str(tmp_path / "x.png"))
-    assert p.returncode == 2 and "no such file" in p.stderr
+    assert p.returncode == 2 and p.stderr == "ndtrace: error: scenes/missing.toml: no such file\n"
     p = cli(str(bad), "-o", str(tmp_path / "x.png"), "--debug")
     assert p.returncode == 2 and "Traceback" in p.stderr
 
 
 def test_cli_version_and_help():
     p = cli("--version")
+    assert p.returncode == 0 and p.stdout.strip() == f"ndtrace {ndtrace.__version__}"
+    p = subprocess.run([sys.executable, "-m", "ndtrace", "--version"], capture_output=True, text=True, cwd=ROOT)
     assert p.returncode == 0 and p.stdout.strip() == f"ndtrace {ndtrace.__version__}"
     p = cli("--help")
     assert p.returncode == 0 and "ndtrace scenes/tesseract.toml -o tesseract.png" in p.stdout
@@ -197,3 +272,42 @@ def test_cli_ctrl_c_stops_quickly_and_leaves_no_output(tmp_path):
     assert proc.returncode == 130, proc.stderr.read()
     assert out.read_bytes() == b"previous picture"
     assert [p.name for p in tmp_path.iterdir()] == ["t.png"]
+
+
+def test_cli_set_overrides_nested_keys_and_its_errors_name_the_flag(tmp_path):
+    out = tmp_path / "c.exr"
+    p = cli("scenes/cube.toml", "-o", str(out), "--resolution", "12", "--size", "24x24", "--quiet",
+            "--set", "camera.fov=30", "--set", "objects.0.material.color=[1,0,0]",
+            "--set", "composite.mode=first_hit", "--set", "render.shadows=false")
+    assert p.returncode == 0, p.stderr
+    d = ndtrace.load_file(os.path.join(ROOT, "scenes", "cube.toml")).to_dict()
+    d["camera"].update(fov=30, resolution=12)
+    d["objects"][0]["material"]["color"] = [1, 0, 0]
+    d["render"]["shadows"] = False
+    scene = ndtrace.load_dict(d, base=os.path.join(ROOT, "scenes"))
+    expected = ndtrace.composite(ndtrace.trace(scene), mode="first_hit", size=(24, 24),
+                                 background=d["background"])
+    np.testing.assert_array_equal(ndtrace.read_exr(out), expected)
+    cases = [
+        (["--set", "camera.fov=400"], "ndtrace: error: --set camera.fov=400: camera.fov: must be between 0 and 180 degrees, got 400"),
+        (["--set", "camera.fov=40", "--set", "objects.0.material.colr=[1,0,0]"],
+         'ndtrace: error: --set objects.0.material.colr=[1,0,0]: objects[0].material.colr: unknown key "colr" (did you mean "color"?)'),
+        (["--set", "objects.3.material.color=[1,0,0]"], "ndtrace: error: --set objects.3.material.color=[1,0,0]: objects has 1 entries, no 3"),
+        (["--set", "camera"], "ndtrace: error: --set camera: expected KEY.PATH=VALUE, e.g. camera.fov=40"),
+    ]
+    for extra, want in cases:
+        p = cli("scenes/cube.toml", "-o", str(tmp_path / "x.png"), *extra)
+        assert p.returncode == 2 and p.stderr.strip() == want, p.stderr
+
+
+def test_cli_videos_alone_unless_keep_frames(tmp_path):
+    args = ["scenes/tesseract_spin.toml", "--frames", "3", "--resolution", "8", "--size", "24x24", "--quiet"]
+    p = cli(*args, "-o", str(tmp_path / "spin.gif"))
+    assert p.returncode == 0, p.stderr
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["spin.gif"]
+    p = cli(*args, "-o", str(tmp_path / "keep.gif"), "--keep-frames")
+    assert p.returncode == 0, p.stderr
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["keep.gif", "keep_0001.png", "keep_0002.png",
+                                                         "keep_0003.png", "spin.gif"]
+    mode, first = read_image(tmp_path / "keep_0001.png")
+    assert mode == "RGB" and first.shape == (24, 24, 3)  # frames are opaque, as the GIF

@@ -2,7 +2,8 @@
 
 Each scene is rendered small (32³ retina for N = 4, 12⁴ for N = 5, 128² for N = 3, 256 for
 N = 2) and composited to 256 × 256 with the scene's own [composite] settings, converted to
-8-bit sRGB exactly as PNG output is, and compared with tests/golden/<name>.png: a pixel may
+8-bit sRGB exactly as transparent PNG output is (alpha kept, so that coverage is compared too),
+and compared with tests/golden/<name>.png: a pixel may
 differ by at most TOLERANCE in any channel, and at most OUTLIERS of the pixels may exceed it.
 On failure the actual, reference and difference images are written to tests/golden-failures/
 (git-ignored). ``pytest --update-golden`` regenerates the references; a reference changes only
@@ -60,7 +61,8 @@ def render_small(path: str, mode: str | None) -> np.ndarray:
 
 
 def to_srgb8(rgba: np.ndarray) -> np.ndarray:
-    """Premultiplied linear RGBA → 8-bit sRGB with straight alpha (as ndtrace.write_png)."""
+    """Premultiplied linear RGBA → 8-bit sRGB with straight alpha (as
+    ``ndtrace.write_png(..., transparent=True)``: the references keep alpha)."""
     a = np.clip(rgba[..., 3:4], 0.0, 1.0)
     straight = np.where(a > 0, rgba[..., :3] / np.where(a > 0, a, 1.0), 0.0)
     x = np.clip(straight, 0.0, 1.0)

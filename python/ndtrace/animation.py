@@ -7,6 +7,7 @@ The ``[animation]`` table (``docs/scene-format.md``) names one rotation — a pl
 table drives ``ndtrace.animate``, the CLI's ``--frames`` and scripts::
 
     scene = ndtrace.load_file("scenes/tesseract_spin.toml")
+    ndtrace.animate(scene, "spin.gif")            # spin.gif (keep_frames=True: + spin_0001.png …)
     ndtrace.animate(scene, "spin.png")            # spin_0001.png … spin_0024.png + spin.gif
     ndtrace.animate(scene, "spin.gif", frames=12, animation={"sweep": {"plane": [1, 3],
                     "degrees": [0, 90]}})
@@ -159,12 +160,14 @@ def animate(
     threads: int | None = None,
     composite: dict | None = None,
     progress: Callable[[int, int], object] | None = None,
+    keep_frames: bool = False,
 ) -> list[str]:
     """Renders the scene's animation and returns the paths written.
 
     ``output`` is ``out.png`` (numbered frames ``out_0001.png`` … plus ``out.gif``, or
     ``out.mp4`` with ``video="mp4"``, or frames only with ``video=None``), ``out.gif`` or
-    ``out.mp4`` (the numbered PNG frames are written beside it as well). ``animation`` replaces
+    ``out.mp4`` (just the video; with ``keep_frames`` the numbered PNG frames are written beside
+    it as well). Frames are opaque, as the video shows them. ``animation`` replaces
     the scene's ``[animation]`` table (same keys) and ``frames`` its frame count. Each frame is
     traced, composited with the scene's ``[composite]`` options updated by ``composite``, and
     written atomically; the MP4 is encoded as frames arrive, the GIF (palette frames, at most
@@ -191,13 +194,15 @@ def animate(
                 f"{count * int(width) * int(height) / 2**30:.1f} GiB: write an MP4 "
                 "(video='mp4') or PNG frames only (video=None), or use fewer frames")
     paths = frame_paths(output, count)
+    write_frames = bool(keep_frames) or output.lower().endswith(".png")
     movie = _Video(kind, os.path.splitext(output)[0] + "." + kind, float(table["fps"])) if kind else None
     try:
         for k, path in enumerate(paths):
             tick = None if progress is None else (lambda done, _total, k=k: progress(k * cells + done, count * cells))
             still = frame_scene(animated, k)
             picture = _composite(trace(still, threads=threads, progress=tick), threads=threads, **options)
-            write_png(path, picture)
+            if write_frames:
+                write_png(path, picture)
             if movie is not None:
                 movie.add(to_srgb8(picture, opaque=True))
             if progress is not None:
@@ -208,4 +213,4 @@ def animate(
         if movie is not None:
             movie.abort()
         raise
-    return paths + ([movie.path] if movie is not None else [])
+    return (paths if write_frames else []) + ([movie.path] if movie is not None else [])

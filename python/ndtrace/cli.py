@@ -5,6 +5,8 @@
     ndtrace scenes/penteract.toml -o penteract.png --composite mip --view 40,25 --size 800x600
     ndtrace my_scene.py -o out.png          # a Python script defining scene() -> ndtrace.Scene
     ndtrace scenes/tesseract_spin.toml -o spin.gif --frames 24   # the scene's [animation]
+    ndtrace scenes/cube.toml -o cube.jpg --set camera.fov=40 --set objects.0.material.color=[1,0,0]
+    python -m ndtrace scenes/cube.toml -o cube.png --transparent   # the same command
 
 The whole scene is validated before any work; errors are one line on stderr (exit status 2),
 with a traceback only under --debug. Ctrl-C stops within a second, leaves no partial output
@@ -14,16 +16,18 @@ and exits with status 130.
 from __future__ import annotations
 
 import argparse
+import copy
 import os
 import runpy
 import sys
 import time
+import tomllib
 import traceback
 
 import numpy as np
 
 from . import __version__
-from .files import write_exr, write_png
+from .files import IMAGE_FORMATS, write_exr, write_image
 from .retina import trace
 from .scene import Scene, load_dict, load_file
 
@@ -82,8 +86,8 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument("scene", help="a .toml scene, or a .py script defining scene() -> ndtrace.Scene")
     p.add_argument("-o", "--output", required=True,
-                   help="the picture to write: .png or .exr; for an animation .png (numbered "
-                   "frames out_0001.png … plus a video), .gif or .mp4")
+                   help="the picture to write: .png, .jpg, .webp, .tif or .exr; for an animation "
+                   ".gif or .mp4 (the video), or .png (numbered frames out_0001.png … plus a video)")
     p.add_argument("--retina", metavar="FILE.exr", help="also write the traced retina there")
     p.add_argument("--resolution", help="cells per retina axis: R or R1,R2,… (overrides the camera's)")
     p.add_argument("--samples", type=int, help="rays per retina cell")
@@ -97,10 +101,97 @@ def _parser() -> argparse.ArgumentParser:
                    help="render K frames of the scene's [animation] (implied by -o .gif/.mp4)")
     p.add_argument("--video", choices=("gif", "mp4", "none"), default="gif",
                    help="with --frames and -o .png: the video written beside the frames")
+    _add_output_options(p)
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.add_argument("--version", action="version", version=f"ndtrace {__version__}")
     return p
+
+
+def _add_output_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
+                   help="override a scene key, e.g. camera.fov=40 or objects.0.material.color=[1,0,0] "
+                   "(VALUE in TOML syntax; a bare word is a string); repeatable, applied in order "
+                   "before the other options")
+    p.add_argument("--transparent", action="store_true",
+                   help="keep alpha: the picture without the scene's background (.png, .webp, "
+                   ".tif, .exr); by default pictures are opaque over the background")
+    p.add_argument("--keep-frames", action="store_true",
+                   help="with -o .gif/.mp4: also write the numbered PNG frames")
+
+
+def _set_path(text: str) -> tuple[list, object]:
+    """``KEY.PATH=VALUE`` → (path steps, value parsed as TOML, or the bare text)."""
+    key, sep, value = text.partition("=")
+    steps = key.strip().split(".")
+    if not sep or not all(steps):
+        raise UsageError(f"--set {text}: expected KEY.PATH=VALUE, e.g. camera.fov=40")
+    try:
+        parsed = tomllib.loads(f"v = {value.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        parsed = value.strip()
+    return [int(k) if k.isdigit() else k for k in steps], parsed
+
+
+def _set(data: dict, text: str) -> None:
+    """Applies one ``--set`` to a scene description (missing tables are created)."""
+    steps, value = _set_path(text)
+    node = data
+    for i, step in enumerate(steps):
+        where = ".".join(map(str, steps[:i])) or "the scene"
+        last = i == len(steps) - 1
+        if isinstance(node, list):
+            if not isinstance(step, int):
+                raise UsageError(f"--set {text}: {where} is a list: expected an index, got {step!r}")
+            if step >= len(node):
+                raise UsageError(f"--set {text}: {where} has {len(node)} entries, no {step}")
+        elif isinstance(node, dict):
+            step = str(step)
+            if not last and not isinstance(node.get(step), (dict, list)):
+                node[step] = {}
+        else:
+            raise UsageError(f"--set {text}: {where} is a value, not a table or list")
+        if last:
+            node[step] = value
+        else:
+            node = node[step]
+
+
+def _apply_sets(scene: Scene, sets: list[str], base: str) -> Scene:
+    """The scene with every ``--set`` applied, validated; an error names the first override
+    that makes the scene invalid."""
+    if not sets:
+        return scene
+    original = scene.to_dict()
+    data = copy.deepcopy(original)
+    for text in sets:
+        _set(data, text)
+    try:
+        return load_dict(data, base=base, name="--set " + " --set ".join(sets))
+    except ValueError:
+        data = copy.deepcopy(original)
+        for text in sets:
+            _set(data, text)
+            load_dict(data, base=base, name=f"--set {text}")  # raises for the culprit
+        raise
+
+
+def _picture_options(scene: Scene, transparent: bool) -> dict:
+    """The composite options of a still: the scene's, without its background when transparent
+    (then the picture is premultiplied RGBA over black, as transparent files store it)."""
+    from .composite import scene_options
+
+    options = scene_options(scene.to_dict())
+    if transparent:
+        options["background"] = None
+    return options
+
+
+def _write_picture(path: str, picture, transparent: bool) -> None:
+    if path.lower().endswith(".exr"):
+        write_exr(path, picture)
+    else:
+        write_image(path, picture, transparent=transparent)
 
 
 def _ints(text: str, option: str, sep: str = ",") -> list[int]:
@@ -145,7 +236,11 @@ def run(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     # 1. Validate everything before any work or progress output.
     animating = args.frames is not None or args.output.lower().endswith((".gif", ".mp4"))
-    _check_output(args.output, (".png", ".gif", ".mp4") if animating else (".png", ".exr"), "-o")
+    stills = tuple(IMAGE_FORMATS) + (".exr",)
+    _check_output(args.output, (".png", ".gif", ".mp4") if animating else stills, "-o")
+    if args.transparent and (animating or args.output.lower().endswith((".jpg", ".jpeg"))):
+        raise UsageError("--transparent: GIF, MP4 and JPEG pictures are opaque; write a .png, "
+                         ".webp, .tif or .exr still")
     if args.frames is not None and args.frames < 1:
         raise UsageError(f"--frames: must be at least 1, got {args.frames}")
     if animating and args.retina:
@@ -155,6 +250,7 @@ def run(argv: list[str] | None = None) -> int:
     if args.threads is not None and args.threads < 1:
         raise UsageError(f"--threads: must be at least 1, got {args.threads}")
     scene = _load(args.scene)
+    scene = _apply_sets(scene, args.set, scene._base or os.path.dirname(os.path.abspath(args.scene)))
     data = scene.to_dict()
     render = data.setdefault("render", {})
     if args.resolution:
@@ -184,7 +280,7 @@ def run(argv: list[str] | None = None) -> int:
     scene = load_dict(data, base=scene._base or os.path.dirname(os.path.abspath(args.scene)))
 
     # 2. Trace, then composite, with a progress bar.
-    from .composite import composite, scene_options
+    from .composite import composite
 
     bar = Progress(args.quiet)
     if animating:
@@ -195,29 +291,26 @@ def run(argv: list[str] | None = None) -> int:
             raise UsageError(f"{args.scene}: the scene has no [animation] table to render frames of")
         bar.begin("frames")
         paths = animate(scene, args.output, frames=args.frames, video=video,
-                        threads=args.threads, progress=bar.update)
+                        threads=args.threads, progress=bar.update, keep_frames=args.keep_frames)
         bar.end()
         if not args.quiet:
             pngs = [p for p in paths if p.endswith(".png")]
             videos = [p for p in paths if not p.endswith(".png")]
-            print(f"wrote {len(pngs)} frames {pngs[0]} … {pngs[-1]}"
-                  + (f" and {videos[0]}" if videos else ""), file=sys.stderr)
+            written = ([f"{len(pngs)} frames {pngs[0]} … {pngs[-1]}"] if pngs else []) + videos
+            print("wrote " + " and ".join(written), file=sys.stderr)
         return 0
     bar.begin("tracing")
     retina = trace(scene, threads=args.threads, progress=bar.update)
     bar.end()
     bar.begin("compositing")
-    picture = composite(retina, **scene_options(scene.to_dict()))
+    picture = composite(retina, **_picture_options(scene, args.transparent))
     bar.update(1, 1)
     bar.end()
 
     # 3. Write (each file atomically).
     if args.retina:
         write_exr(args.retina, retina)
-    if args.output.lower().endswith(".png"):
-        write_png(args.output, picture)
-    else:
-        write_exr(args.output, picture)
+    _write_picture(args.output, picture, args.transparent)
     if not args.quiet:
         print(f"wrote {args.output}" + (f" and {args.retina}" if args.retina else ""), file=sys.stderr)
     return 0

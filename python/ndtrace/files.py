@@ -1,4 +1,5 @@
-"""Pictures and retinas on disk: OpenEXR and 8-bit sRGB PNG (format: docs/retina-format.md).
+"""Pictures and retinas on disk: OpenEXR (floats, retinas) and 8-bit sRGB PNG, JPEG, WebP and
+TIFF through Pillow (format: docs/retina-format.md).
 
 Every file is written to a temporary file and renamed into place: an interrupted or failed
 write never leaves a broken file where a good one was.
@@ -7,13 +8,18 @@ write never leaves a broken file where a good one was.
 from __future__ import annotations
 
 import os
+import tempfile
 
 import numpy as np
 
 from . import _ndtrace
 from .retina import Retina
 
-__all__ = ["write_exr", "read_exr", "write_png"]
+__all__ = ["write_exr", "read_exr", "write_png", "write_image", "IMAGE_FORMATS"]
+
+#: The 8-bit picture formats by extension (Pillow's format names).
+IMAGE_FORMATS: dict[str, str] = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG",
+                                 ".webp": "WEBP", ".tif": "TIFF", ".tiff": "TIFF"}
 
 _EXTS = (".exr",)
 
@@ -70,12 +76,74 @@ def read_exr(path: str | os.PathLike):
     return out["rgba"]
 
 
-def write_png(path: str | os.PathLike, image) -> None:
-    """Writes a picture ``(H, W, 4)`` (premultiplied linear RGBA) as 8-bit sRGB PNG with
-    straight alpha."""
+def _pixels(name: str, image, transparent: bool) -> np.ndarray:
+    """The 8-bit pixels of a picture: uint8 arrays as they are; real arrays are linear, as
+    (H, W) grey, (H, W, 3) RGB or (H, W, 4) premultiplied RGBA, encoded as sRGB, RGBA as its
+    colour over its background (opaque RGB) or, when ``transparent``, with straight alpha."""
+    a = np.asarray(image)
+    if not (a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (3, 4))) or 0 in a.shape[:2]:
+        raise ValueError(f"{name}: expected an image of shape (H, W), (H, W, 3) or (H, W, 4), "
+                         f"got {a.shape}")
+    if a.dtype == np.uint8:
+        return np.ascontiguousarray(a)
+    if a.ndim == 3 and a.shape[2] == 4:
+        return to_srgb8(_image(name, a), opaque=not transparent)
+    if a.dtype.kind not in "biuf":
+        raise ValueError(f"{name}: expected real numbers, got dtype {a.dtype}")
+    rgb = a[..., None].repeat(3, axis=-1) if a.ndim == 2 else a
+    rgba = np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,), rgb.dtype)], axis=-1)
+    out = to_srgb8(_image(name, rgba), opaque=True)
+    return np.ascontiguousarray(out[..., 0]) if a.ndim == 2 else out
+
+
+def write_image(path: str | os.PathLike, image, *, transparent: bool = False,
+                quality: int = 95) -> None:
+    """Writes a picture as an 8-bit sRGB image whose format follows the extension: ``.png``,
+    ``.jpg``/``.jpeg``, ``.webp`` or ``.tif``/``.tiff`` (:data:`IMAGE_FORMATS`, Pillow).
+
+    ``image`` is a picture of :func:`ndtrace.composite`: float ``(H, W, 4)``, linear, RGB
+    composited over the background and A the content's opacity. By default the file is
+    **opaque**, that colour as it is (as GIF and MP4 frames show it); ``transparent=True``
+    keeps alpha, un-premultiplying the colour (straight alpha), which is right for a picture
+    composited over black (``ndtrace.composite``'s default background). Float ``(H, W)`` grey
+    and ``(H, W, 3)`` RGB pictures are linear and opaque. ``uint8`` images ``(H, W)``,
+    ``(H, W, 3)`` or ``(H, W, 4)`` are taken as encoded already and written unchanged (L, RGB
+    or RGBA). JPEG has no alpha channel; ``quality`` is that of JPEG and WebP.
+    """
+    path = os.fspath(path)
+    ext = os.path.splitext(path)[1].lower()
+    if ext not in IMAGE_FORMATS:
+        raise ValueError(f"{path}: unknown extension for a picture: expected "
+                         f"{', '.join(IMAGE_FORMATS)}")
+    kind = IMAGE_FORMATS[ext]
+    pixels = _pixels("image", image, transparent)
+    if kind == "JPEG" and pixels.ndim == 3 and pixels.shape[2] == 4:
+        raise ValueError(f"{path}: JPEG has no alpha channel: write .png, .webp or .tif for "
+                         "transparency")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise OSError(f"{path}: cannot write: folder {folder} does not exist")
+    from PIL import Image
+
+    options = {"quality": int(quality)} if kind in ("JPEG", "WEBP") else {}
+    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.tmp-", suffix=ext, dir=folder)
+    os.close(fd)
+    try:
+        Image.fromarray(pixels).save(tmp, format=kind, **options)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def write_png(path: str | os.PathLike, image, *, transparent: bool = False) -> None:
+    """Writes a picture as an 8-bit sRGB PNG: opaque by default (the picture's colour over its
+    background, as ndtrace.composite made it), straight alpha with ``transparent=True``;
+    ``uint8`` images are written unchanged (see :func:`write_image`)."""
     path = os.fspath(path)
     _check_ext(path, (".png",), "a PNG file")
-    _ndtrace.write_png(path, _image("image", image))
+    write_image(path, image, transparent=transparent)
 
 
 def to_srgb8(image, *, opaque: bool = False) -> np.ndarray:

@@ -1,5 +1,313 @@
-"""Meshes of (N−1)-simplices in R^N: their polytope structure (``feature_edges``)."""
+"""Meshes: the tessellations of (N−1)-simplices that ndtrace renders, to and from the Python
+mesh ecosystem (scipy, meshio, trimesh).
 
+A mesh is a pair ``(vertices, simplices)``: ``vertices`` of shape (V, N), float64, and
+``simplices`` of shape (S, N), int64 indices into ``vertices``, one row per (N−1)-simplex. The
+order of a row fixes the simplex's orientation: its normal is the generalized cross product of
+``x_1 − x_0 … x_{N−1} − x_0`` (eq. 6 of the course notes; for N = 3 the usual right-hand,
+counter-clockwise rule of OBJ and STL files). A closed mesh is **consistently oriented** when
+the two simplices at every ridge (N − 1 shared vertices) induce opposite orientations on it, and
+**outward** when its enclosed volume ``Σ N_s·(x_0 − c) / N!`` is positive. Back-face culling
+and the convexity shortcut of shadow rays rely on both; a scene warns when it loads a closed
+mesh that is not consistently oriented.
+
+Every function takes and returns such a pair, so they compose::
+
+    vertices, simplices = ndtrace.mesh.convex_hull(points)            # outward hull, N = 2…8
+    vertices, simplices = ndtrace.mesh.orient(vertices, simplices)    # repair orientation
+    edges = ndtrace.mesh.feature_edges(vertices, simplices)           # the polytope's edges
+    vertices, simplices = ndtrace.mesh.read("bunny.obj")               # meshio formats, .npz
+    scene.add_object("mesh", mesh=(vertices, simplices))               # or a trimesh / meshio mesh
+
+File formats: ``.npz`` archives with arrays ``vertices`` and ``simplices`` (any N, read by the
+core without extra packages), and through meshio (``pip install "ndtrace[mesh]"``) ``.obj``,
+``.ply``, ``.stl``, ``.off``, ``.vtk``, ``.vtu``, ``.msh`` and meshio's other formats: line
+cells for N = 2, triangles (quads split in two) for N = 3, tetrahedra for N = 4. Points with
+fewer than N coordinates get zeros for the missing ones (a tetrahedral mesh of a 3D solid lies
+in the hyperplane x_3 = 0 of R^4).
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+
+import numpy as np
+
+from . import _ndtrace
 from .edges import feature_edges
+from .geometry import generalized_cross
 
-__all__ = ["feature_edges"]
+__all__ = ["convex_hull", "orient", "feature_edges", "read", "from_object", "CELL_TYPES"]
+
+#: The meshio cell types that hold the (N−1)-simplices of a dimension-N scene ("quad" cells are
+#: split into two triangles).
+CELL_TYPES: dict[int, tuple[str, ...]] = {2: ("line",), 3: ("triangle", "quad"), 4: ("tetra",)}
+
+_MESH_EXTRA = 'pip install "ndtrace[mesh]"'
+
+
+def _needs(package: str, what: str):
+    try:
+        return __import__(package)
+    except ImportError:
+        raise ImportError(f"{what} needs {package}: {_MESH_EXTRA}") from None
+
+
+def _vertices(name: str, vertices, dim: int | None = None) -> np.ndarray:
+    v = np.asarray(vertices)
+    if v.dtype.kind not in "biuf":
+        raise ValueError(f"{name}: expected real numbers, got dtype {v.dtype}")
+    v = np.ascontiguousarray(v, dtype=np.float64)
+    if v.ndim != 2 or not 2 <= v.shape[1] <= 8:
+        raise ValueError(f"{name}: expected shape (V, N) with N in 2..8, got {v.shape}")
+    if dim is not None and v.shape[1] != dim:
+        raise ValueError(f"{name}: expected shape (V, {dim}) (dim = {dim}), got {v.shape}")
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{name}: holds NaN or infinite values")
+    return v
+
+
+def _simplices(name: str, simplices, vertex_count: int, dim: int) -> np.ndarray:
+    s = np.asarray(simplices)
+    if s.size == 0:
+        s = s.reshape(0, dim).astype(np.int64)
+    if s.dtype.kind not in "iu":
+        raise ValueError(f"{name}: expected integer vertex indices, got dtype {s.dtype}")
+    if s.ndim != 2 or s.shape[1] != dim:
+        raise ValueError(f"{name}: expected shape (S, {dim}), {dim} vertex indices per "
+                         f"(N−1)-simplex, got {s.shape}")
+    bad = np.argwhere((s < 0) | (s >= vertex_count))
+    if len(bad):
+        i, k = bad[0]
+        raise ValueError(f"{name}[{i}][{k}]: vertex index {s[i, k]} out of range: there are "
+                         f"{vertex_count} vertices")
+    return np.ascontiguousarray(s, dtype=np.int64)
+
+
+def _mesh(vertices, simplices, dim: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    v = _vertices("vertices", vertices, dim)
+    return v, _simplices("simplices", simplices, len(v), v.shape[1])
+
+
+def _affine_rank(p: np.ndarray, idx, tol: float) -> int:
+    x = p[list(idx)]
+    if len(x) < 2:
+        return 0
+    sv = np.linalg.svd(x[1:] - x[0], compute_uv=False)
+    return int(np.sum(sv > tol))
+
+
+def _facets(hull, scale: float) -> list[tuple[frozenset, int]]:
+    """Qhull's triangulated facets merged back into the hull's facets: (vertex set, index of one
+    of its simplices), joining neighbouring simplices whose hyperplanes agree."""
+    count = len(hull.simplices)
+    parent = list(range(count))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    eq = hull.equations
+    tol = np.r_[np.full(eq.shape[1] - 1, 1e-9), 1e-9 * scale]  # unit normals, then offsets
+    for i in range(count):
+        for j in hull.neighbors[i]:
+            if j > i and np.all(np.abs(eq[i] - eq[j]) <= tol):
+                parent[root(i)] = root(j)
+    groups: dict[int, set] = {}
+    for i in range(count):
+        groups.setdefault(root(i), set()).update(int(k) for k in hull.simplices[i])
+    return [(frozenset(v), r) for r, v in groups.items()]
+
+
+def _pulling(face: frozenset, dim: int, facets: list[frozenset], p: np.ndarray, tol: float,
+             memo: dict) -> list[tuple[int, ...]]:
+    """The pulling triangulation of a face of the hull (its vertex set, affine dimension
+    ``dim``): cone from its lowest vertex over the triangulations of its own facets not
+    containing it. A face's facets are its intersections with the hull's facets that have
+    dimension ``dim − 1``; memoized, so each face is triangulated once and neighbours agree."""
+    if face in memo:
+        return memo[face]
+    if len(face) == dim + 1:
+        out = [tuple(sorted(face))]
+    else:
+        v = min(face)
+        subs = {face & f for f in facets if not face <= f}
+        out = []
+        for sub in subs:
+            if v not in sub and len(sub) >= dim and _affine_rank(p, sub, tol) == dim - 1 and \
+                    not any(sub < other for other in subs if _affine_rank(p, other, tol) == dim - 1):
+                out += [(v,) + t for t in _pulling(sub, dim - 1, facets, p, tol, memo)]
+    memo[face] = out
+    return out
+
+
+def convex_hull(points) -> tuple[np.ndarray, np.ndarray]:
+    """The boundary of the convex hull of ``points`` (P, N), N = 2…8, as an outward-oriented
+    mesh ``(vertices, simplices)``: ``vertices`` are the hull's vertices (a subset of the
+    points, in their order) and every simplex's normal (eq. 6) points away from the hull.
+
+    The hull's facets come from scipy's Qhull. Facets with more than N vertices (the cubes of
+    the tesseract, the octahedra of the 24-cell, the dodecahedra of the 120-cell) are cut into
+    simplices by the pulling triangulation (each face coned from its lowest-numbered vertex
+    over its own faces), which agrees on the faces neighbouring facets share and has no
+    zero-volume simplices, unlike Qhull's own; so the mesh is closed and consistently oriented.
+    Needs scipy (``pip install "ndtrace[mesh]"``). Raises ValueError when the points do not
+    span N dimensions.
+    """
+    p = _vertices("points", points)
+    n = p.shape[1]
+    if len(p) < n + 1:
+        raise ValueError(f"points: a hull in R^{n} needs at least {n + 1} points, got {len(p)}")
+    _needs("scipy", "ndtrace.mesh.convex_hull")
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        hull = ConvexHull(p)
+    except QhullError as e:
+        first = str(e).strip().splitlines()[0] if str(e).strip() else "Qhull failed"
+        raise ValueError(f"points: no convex hull in R^{n} (do the points span {n} "
+                         f"dimensions?): {first}") from None
+    scale = float(np.abs(p).max()) or 1.0
+    tol = 1e-9 * scale
+    facets = _facets(hull, scale)
+    sets = [f for f, _ in facets]
+    memo: dict = {}
+    rows, normals = [], []
+    for face, r in facets:
+        for t in _pulling(face, n - 1, sets, p, tol, memo):
+            rows.append(t)
+            normals.append(hull.equations[r, :n])
+    s = np.array(rows, dtype=np.int64)
+    cross = generalized_cross(p[s[:, 1:]] - p[s[:, :1]])
+    inward = np.einsum("ij,ij->i", cross, np.array(normals)) < 0
+    s[inward, 0], s[inward, 1] = s[inward, 1], s[inward, 0]
+    used, inverse = np.unique(s, return_inverse=True)
+    return p[used], inverse.reshape(s.shape).astype(np.int64)
+
+
+def orient(vertices, simplices) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh with its simplices consistently oriented: ``(vertices, simplices)`` with some
+    rows of ``simplices`` having their first two indices swapped.
+
+    Each connected piece (simplices linked through shared ridges) is walked breadth-first from
+    its first simplex, every neighbour taking the orientation that agrees with the simplex it
+    was reached from; then a closed piece is turned outward (positive enclosed volume) and a
+    piece with a boundary keeps the orientation most of its simplices had. Simplices with a
+    repeated index are left as they are. Raises ValueError when a ridge belongs to more than
+    two simplices or a piece is not orientable (a Möbius strip).
+    """
+    v, s = _mesh(vertices, simplices)
+    flips = _ndtrace.orient_flips(v, s.astype(np.uint32))
+    out = s.copy()
+    out[flips, 0], out[flips, 1] = s[flips, 1], s[flips, 0]
+    return v, out
+
+
+def _points(name: str, points, dim: int) -> np.ndarray:
+    p = np.asarray(points, dtype=np.float64)
+    if p.ndim != 2:
+        raise ValueError(f"{name}: expected points of shape (V, d), got {p.shape}")
+    if p.shape[1] < dim:
+        p = np.pad(p, ((0, 0), (0, dim - p.shape[1])))
+    elif p.shape[1] > dim:
+        extra = p[:, dim:]
+        if np.any(extra != 0):
+            raise ValueError(f"{name}: the points have {p.shape[1]} coordinates, but the scene "
+                             f"has dim = {dim} (and coordinates {dim}… are not all zero)")
+        p = p[:, :dim]
+    return p
+
+
+def _cell_blocks(cells) -> list[tuple[str, np.ndarray]]:
+    """meshio's cells (CellBlocks, (type, data) pairs or a {type: data} dict) as pairs."""
+    if isinstance(cells, dict):
+        return [(str(t), np.asarray(d)) for t, d in cells.items()]
+    out = []
+    for block in cells:
+        if hasattr(block, "type") and hasattr(block, "data"):
+            out.append((str(block.type), np.asarray(block.data)))
+        else:
+            t, d = block
+            out.append((str(t), np.asarray(d)))
+    return out
+
+
+def _from_cells(points, cells, dim: int | None, what: str) -> tuple[np.ndarray, np.ndarray]:
+    blocks = _cell_blocks(cells)
+    types = [t for t, _ in blocks]
+    if dim is None:
+        dim = next((d for d in (4, 3, 2) if any(t in CELL_TYPES[d] for t in types)), None)
+        if dim is None:
+            raise ValueError(f"{what}: no line, triangle, quad or tetra cells (cells: "
+                             f"{', '.join(types) or 'none'})")
+    if dim not in CELL_TYPES:
+        raise ValueError(f"{what}: mesh files hold lines, triangles or tetrahedra (N = 2, 3, 4); "
+                         f"for dim = {dim} write an .npz with arrays vertices and simplices")
+    parts = []
+    for t, data in blocks:
+        if t not in CELL_TYPES[dim]:
+            continue
+        data = np.asarray(data, dtype=np.int64)
+        if t == "quad":  # [a, b, c, d] → [a, b, c], [a, c, d]: the same orientation
+            data = np.concatenate([data[:, [0, 1, 2]], data[:, [0, 2, 3]]])
+        parts.append(data.reshape(-1, dim))
+    if not parts:
+        raise ValueError(f"{what}: no {' or '.join(CELL_TYPES[dim])} cells for a dim = {dim} "
+                         f"scene (cells: {', '.join(types) or 'none'})")
+    vertices = _points(f"{what}: points", points, dim)
+    return _mesh(vertices, np.concatenate(parts), dim)
+
+
+def from_object(obj, dim: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``(vertices, simplices)`` from a mesh object: anything with ``.vertices`` and ``.faces``
+    (a ``trimesh.Trimesh``: triangles, dim 3), anything with ``.points`` and ``.cells`` (a
+    ``meshio.Mesh``: the cells of ``dim``, see :data:`CELL_TYPES`), or a pair ``(vertices,
+    simplices)``. ``dim`` (the scene's) is checked, or inferred when None."""
+    if hasattr(obj, "vertices") and hasattr(obj, "faces"):
+        return _from_cells(np.asarray(obj.vertices), [("triangle", np.asarray(obj.faces))], dim,
+                           f"mesh ({type(obj).__name__})")
+    if hasattr(obj, "points") and hasattr(obj, "cells"):
+        return _from_cells(obj.points, obj.cells, dim, f"mesh ({type(obj).__name__})")
+    if isinstance(obj, (tuple, list)) and len(obj) == 2:
+        return _mesh(obj[0], obj[1], dim)
+    raise TypeError(f"mesh: expected an object with .vertices and .faces (trimesh), .points "
+                    f"and .cells (meshio), or a pair (vertices, simplices), got "
+                    f"{type(obj).__name__}")
+
+
+def read(path: str | os.PathLike, dim: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Reads a mesh file into ``(vertices, simplices)``: an ``.npz`` with arrays ``vertices``
+    (V, N) and ``simplices`` (S, N), or any file meshio reads (see the module docs), for a
+    scene of dimension ``dim`` (None: from the file). Raises FileNotFoundError for a missing
+    file, ImportError naming the ``mesh`` extra when meshio is needed and missing, and
+    ValueError for a file that holds no mesh of that dimension."""
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise FileNotFoundError(errno.ENOENT, "no such mesh file", path)
+    ext = os.path.splitext(path)[1].lower()
+    if ext == ".npz":
+        with np.load(path) as z:
+            missing = [k for k in ("vertices", "simplices") if k not in z.files]
+            if missing:
+                raise ValueError(f"{path}: the .npz has no array named {missing[0]!r} "
+                                 f"(arrays: {', '.join(z.files) or 'none'})")
+            return _mesh(z["vertices"], z["simplices"], dim)
+    meshio = _needs("meshio", f"reading {ext or 'extensionless'} mesh files")
+    try:
+        m = meshio.read(path)
+    except Exception as e:  # noqa: BLE001 - meshio raises many kinds; say which file
+        raise ValueError(f"{path}: meshio cannot read it: {e}") from None
+    return _from_cells(m.points, m.cells, dim, path)
+
+
+def _scene_reader(path: str, dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """What the scene loaders call for a mesh file the core does not read itself (errors
+    become scene errors naming the field and the file)."""
+    try:
+        return read(path, dim)
+    except ValueError as e:
+        message = str(e)
+        raise ValueError(message[len(path) + 2:] if message.startswith(path + ": ") else message) from None

@@ -20,6 +20,7 @@ naming the source, line and column (for files) and the field path, e.g.
 from __future__ import annotations
 
 import copy
+import errno
 import os
 import warnings
 from typing import Any, Callable, Iterable
@@ -27,6 +28,7 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from . import _ndtrace
+from .mesh import _scene_reader, from_object
 
 __all__ = ["Scene", "load_file", "load_dict", "load_toml"]
 
@@ -109,7 +111,17 @@ class Scene:
                    transform: Iterable[dict] | None = None, **shape_keys) -> "Scene":
         """Adds an object: a generated shape (``"simplex"``, ``"hypercube"``,
         ``"cross_polytope"``, ``"sphere"`` with ``subdivisions``) or ``"mesh"`` with
-        ``vertices`` (V, N) and ``simplices`` (S, N), or a ``file``."""
+        ``vertices`` (V, N) and ``simplices`` (S, N), a ``file``, or a ``mesh`` object: anything
+        with ``.vertices`` and ``.faces`` (trimesh), ``.points`` and ``.cells`` (meshio), or a
+        pair ``(vertices, simplices)`` (see :func:`ndtrace.mesh.from_object`)."""
+        if "mesh" in shape_keys:
+            given = [k for k in ("vertices", "simplices", "file") if k in shape_keys]
+            if shape != "mesh" or given:
+                raise ValueError(f"mesh: goes with shape \"mesh\" and without "
+                                 f"{'/'.join(given) or 'vertices, simplices or file'}, "
+                                 f"got shape {shape!r}")
+            vertices, simplices = from_object(shape_keys.pop("mesh"), dim=self.dim)
+            shape_keys = {"vertices": vertices, "simplices": simplices, **shape_keys}
         obj: dict[str, Any] = {"shape": shape, **_plain(shape_keys)}
         if material is not None:
             obj["material"] = _plain(material)
@@ -127,7 +139,8 @@ class Scene:
     def compiled(self) -> _ndtrace.CompiledScene:
         """The validated, built scene (raises ValueError on a bad description)."""
         if self._compiled is None:
-            self._compiled = _ndtrace.load_dict(_plain(self._data), "<scene>", self._base)
+            self._compiled = _ndtrace.load_dict(_plain(self._data), "<scene>", self._base,
+                                                _scene_reader)
             _warn(self._compiled)
         return self._compiled
 
@@ -170,17 +183,23 @@ class Scene:
 
 
 def load_file(path: str | os.PathLike) -> Scene:
-    """Loads a TOML scene file; mesh ``file`` paths are relative to its folder."""
+    """Loads a TOML scene file; mesh ``file`` paths are relative to its folder. Raises
+    FileNotFoundError when there is no such file, ValueError (file:line:column: field) for a
+    bad scene."""
     path = os.fspath(path)
-    return Scene._from_compiled(_ndtrace.load_file(path), os.path.dirname(os.path.abspath(path)))
+    if not os.path.isfile(path):
+        raise FileNotFoundError(errno.ENOENT, "no such scene file", path)
+    return Scene._from_compiled(_ndtrace.load_file(path, _scene_reader),
+                                os.path.dirname(os.path.abspath(path)))
 
 
 def load_toml(text: str, *, name: str = "<string>", base: str | None = None) -> Scene:
     """Loads a scene from TOML text (``name`` appears in error messages)."""
-    return Scene._from_compiled(_ndtrace.load_toml(text, name, base), base)
+    return Scene._from_compiled(_ndtrace.load_toml(text, name, base, _scene_reader), base)
 
 
-def load_dict(data: dict, *, base: str | None = None) -> Scene:
+def load_dict(data: dict, *, base: str | None = None, name: str = "<dict>") -> Scene:
     """Loads a scene from a dict shaped like the TOML format; arrays may be numpy arrays.
-    Relative mesh files resolve against ``base`` (default: the current directory)."""
-    return Scene._from_compiled(_ndtrace.load_dict(_plain(data), "<dict>", base), base)
+    Relative mesh files resolve against ``base`` (default: the current directory); errors are
+    prefixed with ``name``."""
+    return Scene._from_compiled(_ndtrace.load_dict(_plain(data), name, base, _scene_reader), base)

@@ -1,4 +1,5 @@
-//! Kernels behind `ndtrace.write_exr`, `ndtrace.read_exr` and `ndtrace.write_png`.
+//! Kernels behind `ndtrace.write_exr`, `ndtrace.read_exr` and the 8-bit pictures of
+//! `ndtrace.write_image` (which Pillow writes).
 
 use crate::errors::to_py_err;
 use ndtrace::files::{self, ExrContents, Picture};
@@ -76,13 +77,6 @@ fn write_picture_exr(
         .map_err(to_py_err)
 }
 
-/// Writes a 2D picture (H, W, 4) float32, premultiplied linear, as 8-bit sRGB PNG.
-#[pyfunction]
-fn write_png(py: Python<'_>, path: PathBuf, rgba: PyReadonlyArrayDyn<'_, f32>) -> PyResult<()> {
-    let p = picture(&rgba, None)?;
-    py.detach(|| files::write_png(&path, &p)).map_err(to_py_err)
-}
-
 /// A picture (H, W, 4) as 8-bit sRGB: (H, W, 4) with straight alpha, or (H, W, 3) opaque.
 #[pyfunction]
 #[pyo3(signature = (rgba, opaque=false))]
@@ -136,7 +130,6 @@ fn read_exr(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict>> {
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(write_retina_exr, m)?)?;
     m.add_function(wrap_pyfunction!(write_picture_exr, m)?)?;
-    m.add_function(wrap_pyfunction!(write_png, m)?)?;
     m.add_function(wrap_pyfunction!(to_srgb8, m)?)?;
     m.add_function(wrap_pyfunction!(read_exr, m)?)?;
     Ok(())

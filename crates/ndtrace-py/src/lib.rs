@@ -11,6 +11,7 @@ mod edges;
 mod errors;
 mod files;
 mod geometry;
+mod mesh;
 mod rotation;
 mod scene;
 
@@ -45,5 +46,6 @@ fn _ndtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     composite::register(m)?;
     edges::register(m)?;
     files::register(m)?;
+    mesh::register(m)?;
     Ok(())
 }

@@ -2,9 +2,10 @@
 //! class (a validated description plus its built, traceable scene and BVH).
 
 use crate::errors::to_py_err;
+use crate::mesh::PyMeshReader;
 use ndtrace::pool;
 use ndtrace::render::{self, Progress, Retina};
-use ndtrace::scene::{self, AnyScene, SceneDesc};
+use ndtrace::scene::{self, AnyScene, MeshReader, SceneDesc};
 use ndtrace::{with_scene, NdError};
 use numpy::ndarray::{ArrayViewMutD, IxDyn};
 use numpy::PyArrayDyn;
@@ -250,24 +251,39 @@ fn release_buffers() -> usize {
     pool::release()
 }
 
-/// Loads and builds a TOML scene file.
+/// The reader of mesh files that are not `.npz`, as the core takes it.
+fn as_reader(r: &Option<PyMeshReader>) -> Option<&dyn MeshReader> {
+    r.as_ref().map(|r| r as &dyn MeshReader)
+}
+
+/// Loads and builds a TOML scene file; `reader(path, dim)` reads mesh files other than `.npz`.
 #[pyfunction]
-fn load_file(py: Python<'_>, path: PathBuf) -> PyResult<CompiledScene> {
-    let (desc, scene) = py.detach(|| scene::load_file(&path)).map_err(to_py_err)?;
+#[pyo3(signature = (path, reader=None))]
+fn load_file(
+    py: Python<'_>,
+    path: PathBuf,
+    reader: Option<Bound<'_, PyAny>>,
+) -> PyResult<CompiledScene> {
+    let reader = PyMeshReader::new(reader);
+    let (desc, scene) = py
+        .detach(|| scene::load_file_with(&path, as_reader(&reader)))
+        .map_err(to_py_err)?;
     Ok(CompiledScene { desc, scene })
 }
 
 /// Parses TOML text (named `name` in errors) and builds it; relative files resolve against `base`.
 #[pyfunction]
-#[pyo3(signature = (text, name="<string>", base=None))]
+#[pyo3(signature = (text, name="<string>", base=None, reader=None))]
 fn load_toml(
     py: Python<'_>,
     text: &str,
     name: &str,
     base: Option<PathBuf>,
+    reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
+    let reader = PyMeshReader::new(reader);
     let (desc, scene) = py
-        .detach(|| scene::load_toml_str(text, name, base.as_deref()))
+        .detach(|| scene::load_toml_with(text, name, base.as_deref(), as_reader(&reader)))
         .map_err(to_py_err)?;
     Ok(CompiledScene { desc, scene })
 }
@@ -275,13 +291,15 @@ fn load_toml(
 /// Builds a scene from plain Python data (dicts, lists, numbers, strings); errors are named
 /// `name`; relative files resolve against `base`.
 #[pyfunction]
-#[pyo3(signature = (data, name="<dict>", base=None))]
+#[pyo3(signature = (data, name="<dict>", base=None, reader=None))]
 fn load_dict(
     py: Python<'_>,
     data: &Bound<'_, PyAny>,
     name: &str,
     base: Option<PathBuf>,
+    reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
+    let reader = PyMeshReader::new(reader);
     let mut de = pythonize::Depythonizer::from_object(data);
     let desc = scene::deserialize(&mut de).map_err(|e| {
         to_py_err(NdError::Scene {
@@ -291,7 +309,7 @@ fn load_dict(
         })
     })?;
     let scene = py
-        .detach(|| scene::build_desc(&desc, name, base.as_deref()))
+        .detach(|| scene::build_desc_with(&desc, name, base.as_deref(), as_reader(&reader)))
         .map_err(to_py_err)?;
     Ok(CompiledScene { desc, scene })
 }

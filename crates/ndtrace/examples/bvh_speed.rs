@@ -16,7 +16,8 @@
 mod common;
 
 use common::thread_seconds;
-use ndtrace::accel::{simplex_bounds, Bounds, Bvh, PreparedSimplex, Ray};
+use ndtrace::accel::{simplex_bounds, Bounds, Bvh, PreparedSimplex};
+use ndtrace::ray::Ray;
 use rayon::prelude::*;
 use std::time::Instant;
 

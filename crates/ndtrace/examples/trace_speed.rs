@@ -24,7 +24,7 @@
 mod common;
 
 use common::thread_seconds;
-use ndtrace::accel::Ray;
+use ndtrace::ray::Ray;
 use ndtrace::render::{trace, Progress, Retina};
 use ndtrace::scene::{load_file, Scene};
 use ndtrace::with_scene;

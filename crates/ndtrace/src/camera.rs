@@ -14,9 +14,9 @@
 //! looking down −x_N — is `position = d_N·e_N`, `orientation` with columns e_1 … e_{N−1}, −e_N,
 //! and `fov = 2·atan(R_1·pixel / (2·f_N))` for a film of `R_1` cells of size `pixel`.
 
-use crate::accel::Ray;
 use crate::geometry::generalized_cross;
 use crate::linalg::{add_scaled, dot, norm, scale, sub, Matrix, Vector};
+use crate::ray::Ray;
 use crate::scene::desc::Projection;
 
 /// A camera ready to generate rays.

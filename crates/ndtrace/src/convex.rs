@@ -38,7 +38,7 @@
 
 use crate::geometry::{barycentric, generalized_cross, Hyperplane};
 use crate::linalg::{add, dot, norm, scale, sub, Vector};
-use crate::mesh::Mesh;
+use crate::mesh::{orientation::ridge, Mesh};
 use rayon::prelude::*;
 
 /// The interior point must lie at least `MARGIN`·D inside every simplex's hyperplane.
@@ -205,34 +205,6 @@ fn quality<const N: usize>(pts: &[Vector<N>; N]) -> f64 {
         u[k - 1] = scale(&e, 1.0 / l);
     }
     norm(&generalized_cross(&u[..N - 1]))
-}
-
-/// The ridge of a simplex opposite its slot k: a hash of its sorted vertex indices, those
-/// indices (padded with `u32::MAX`), and the orientation the simplex induces on it (the parity
-/// of k plus that of the sort).
-#[inline]
-fn ridge<const N: usize>(idx: &[u32; N], k: usize) -> (u64, [u32; N], bool) {
-    let mut key = [u32::MAX; N];
-    let mut m = 0;
-    for (j, &v) in idx.iter().enumerate() {
-        if j != k {
-            key[m] = v;
-            m += 1;
-        }
-    }
-    let mut odd = k % 2 == 1;
-    for a in 0..N - 1 {
-        for b in a + 1..N - 1 {
-            odd ^= key[a] > key[b];
-        }
-    }
-    key[..N - 1].sort_unstable();
-    let mut h = 0x9e37_79b9_7f4a_7c15u64;
-    for &v in &key[..N - 1] {
-        h = (h ^ u64::from(v)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        h ^= h >> 31;
-    }
-    (h, key, odd)
 }
 
 /// Whether the ray `c + t·dir`, t > 0, crosses simplex i: (1, 0) inside it, (0, 1) within

@@ -31,7 +31,7 @@
 //! projection, away from the edge's ends) can be missed; visible or hidden pieces shorter than [`ON_EDGE`] times the edge's
 //! length are dropped.
 
-use crate::accel::Ray;
+use crate::ray::Ray;
 use crate::camera::Camera;
 use crate::linalg::{dot, mat_vec, sub, transpose, Vector};
 use crate::mesh::feature_edges;

@@ -34,6 +34,7 @@ pub mod geometry;
 pub mod linalg;
 pub mod mesh;
 pub mod pool;
+pub mod ray;
 pub mod render;
 pub mod rotation;
 pub mod scene;

@@ -8,10 +8,11 @@
 //! on the rays it travels with. Every cell's result depends only on the scene, the seed and the
 //! cell index, so the retina is bit-identical whatever the number of threads.
 
-use crate::accel::{Hit, Ray, BOX_PAD, PACKET};
+use crate::accel::{BOX_PAD, PACKET};
 use crate::camera::CentreRays;
 use crate::linalg::{add_scaled, dot, norm, scale, sub, Vector};
 use crate::pool;
+use crate::ray::{Hit, Ray};
 use crate::scene::desc::RenderMode;
 use crate::scene::{Light, Scene};
 use crate::{NdError, NdResult};

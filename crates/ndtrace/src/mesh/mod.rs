@@ -1,6 +1,9 @@
-//! Tessellations of (N−1)-simplices in R^N: the geometry ndtrace renders.
+//! Tessellations of (N−1)-simplices in R^N: the geometry ndtrace renders, and their
+//! [`orientation`].
 
 use crate::linalg::Vector;
+
+pub mod orientation;
 
 /// A mesh of (N−1)-simplices in R^N: vertex positions and, per simplex, its N vertex indices.
 ///

@@ -3,7 +3,7 @@
 
 use super::desc::*;
 use super::errors::PathError;
-use super::npz::read_npz;
+use super::mesh_file::{orientation_warning, read_mesh, MeshReader};
 use crate::accel::{Bvh, PreparedSimplex};
 use crate::camera::{look_at_orientation, Camera};
 use crate::linalg::{add, det, dot, identity, mat_mul, mat_vec, norm, scale, Matrix, Vector};
@@ -589,7 +589,7 @@ fn affine_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<(Matrix<N>, V
     Ok((m, b))
 }
 
-fn mesh_from_rows<const N: usize>(
+pub(super) fn mesh_from_rows<const N: usize>(
     vertices: &[f64],
     nv: usize,
     simplices: &[f64],
@@ -628,7 +628,12 @@ fn mesh_from_rows<const N: usize>(
     Ok(mesh)
 }
 
-fn object_mesh<const N: usize>(o: &ObjectDesc, path: &str, base: Option<&Path>) -> R<Mesh<N>> {
+fn object_mesh<const N: usize>(
+    o: &ObjectDesc,
+    path: &str,
+    base: Option<&Path>,
+    reader: Option<&dyn MeshReader>,
+) -> R<Mesh<N>> {
     let extra = |key: &str, present: bool| -> R<()> {
         if present {
             Err(PathError::new(
@@ -703,40 +708,7 @@ fn object_mesh<const N: usize>(o: &ObjectDesc, path: &str, base: Option<&Path>) 
                     &format!("{path}.simplices"),
                 )?
             }
-            (None, None, Some(file)) => {
-                let full = match base {
-                    Some(b) => b.join(file),
-                    None => Path::new(file).to_path_buf(),
-                };
-                let fpath = format!("{path}.file");
-                let arrays = read_npz(&full, &["vertices", "simplices"])
-                    .map_err(|e| PathError::new(&fpath, e))?;
-                let (v, s) = (&arrays[0], &arrays[1]);
-                if v.shape.1 != N {
-                    return Err(PathError::new(
-                        &fpath,
-                        format!("vertices have shape {:?}, expected (V, {N})", v.shape),
-                    ));
-                }
-                if s.shape.1 != N || !s.integer {
-                    return Err(PathError::new(
-                        &fpath,
-                        format!(
-                            "simplices must be integers of shape (S, {N}), got shape {:?}",
-                            s.shape
-                        ),
-                    ));
-                }
-                mesh_from_rows::<N>(
-                    &v.data,
-                    v.shape.0,
-                    &s.data,
-                    s.shape.0,
-                    path,
-                    &format!("{fpath}:vertices"),
-                    &format!("{fpath}:simplices"),
-                )?
-            }
+            (None, None, Some(file)) => read_mesh::<N>(file, base, reader, path)?,
             (None, None, None) => {
                 return Err(PathError::new(
                     path,
@@ -818,8 +790,18 @@ fn light<const N: usize>(l: &LightDesc, path: &str) -> R<Light<N>> {
 }
 
 /// Checks a whole description and builds the scene for dimension N: validation first (errors
-/// carry the field path), then the shapes, the world-space meshes and the BVH.
+/// carry the field path), then the shapes, the world-space meshes and the BVH. Mesh files
+/// resolve against `base`; only `.npz` ones can be read (see [`build_with`]).
 pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N>> {
+    build_with(desc, base, None)
+}
+
+/// [`build`], with `reader` reading the mesh files of formats other than `.npz`.
+pub fn build_with<const N: usize>(
+    desc: &SceneDesc,
+    base: Option<&Path>,
+    reader: Option<&dyn MeshReader>,
+) -> R<Scene<N>> {
     // 1. Everything that can be checked cheaply, before any heavy work.
     let background = rgb(&desc.background, "background")?;
     let ambient = rgb(&desc.ambient, "ambient")?;
@@ -853,7 +835,7 @@ pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N
     //    keep their orientation.
     let mut objects = Vec::with_capacity(desc.objects.len());
     for (i, (o, (mat, (a, b)))) in desc.objects.iter().zip(plans).enumerate() {
-        let mut mesh = object_mesh::<N>(o, &format!("objects[{i}]"), base)?;
+        let mut mesh = object_mesh::<N>(o, &format!("objects[{i}]"), base, reader)?;
         mesh.vertices
             .par_iter_mut()
             .for_each(|v| *v = add(&mat_vec(&a, v), &b));
@@ -957,7 +939,10 @@ pub fn build<const N: usize>(desc: &SceneDesc, base: Option<&Path>) -> R<Scene<N
     } else {
         norm(&std::array::from_fn::<f64, N, _>(|k| hi[k] - lo[k])).max(1e-300)
     };
-    let mut warnings = vec![];
+    let mut warnings: Vec<String> = (objects.iter().zip(&desc.objects).enumerate())
+        .filter(|(_, (_, d))| d.shape == ShapeKind::Mesh)
+        .filter_map(|(i, (o, _))| orientation_warning(&o.mesh, &format!("objects[{i}]")))
+        .collect();
     if skipped > 0 {
         warnings.push(format!(
             "skipped {skipped} degenerate (zero-volume) simplices"

@@ -5,11 +5,13 @@ pub mod animation;
 pub mod build;
 pub mod desc;
 pub mod errors;
+pub mod mesh_file;
 pub mod npz;
 
 pub use build::{Light, Material, Object, Scene};
 pub use desc::SceneDesc;
 pub use errors::PathError;
+pub use mesh_file::MeshReader;
 
 use crate::{with_dim, NdError, NdResult};
 use errors::{friendly_message, line_col, span_of};
@@ -128,6 +130,16 @@ pub fn load_toml_str(
     name: &str,
     base: Option<&Path>,
 ) -> NdResult<(SceneDesc, AnyScene)> {
+    load_toml_with(text, name, base, None)
+}
+
+/// [`load_toml_str`], with `reader` reading mesh files of formats other than `.npz`.
+pub fn load_toml_with(
+    text: &str,
+    name: &str,
+    base: Option<&Path>,
+    reader: Option<&dyn MeshReader>,
+) -> NdResult<(SceneDesc, AnyScene)> {
     let src = Source::Toml { name, text };
     let root = toml::de::DeTable::parse(text).map_err(|e| {
         let (l, c) = line_col(text, e.span().map_or(0, |s| s.start));
@@ -139,24 +151,42 @@ pub fn load_toml_str(
     })?;
     let desc = deserialize(toml::de::Deserializer::from(root.clone()))
         .map_err(|e| locate(&src, Some(&root), e))?;
-    let scene = build_any(&desc, base).map_err(|e| locate(&src, Some(&root), e))?;
+    let scene = build_any(&desc, base, reader).map_err(|e| locate(&src, Some(&root), e))?;
     Ok((desc, scene))
 }
 
 /// Reads a TOML scene file and builds it; mesh files resolve relative to its directory.
 pub fn load_file(path: &Path) -> NdResult<(SceneDesc, AnyScene)> {
+    load_file_with(path, None)
+}
+
+/// [`load_file`], with `reader` reading mesh files of formats other than `.npz`.
+pub fn load_file_with(
+    path: &Path,
+    reader: Option<&dyn MeshReader>,
+) -> NdResult<(SceneDesc, AnyScene)> {
     let name = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| NdError::Scene {
         location: name.clone(),
         path: String::new(),
         message: format!("cannot read: {e}"),
     })?;
-    load_toml_str(&text, &name, path.parent())
+    load_toml_with(&text, &name, path.parent(), reader)
 }
 
 /// Builds an already deserialized description, locating errors with `name` only.
 pub fn build_desc(desc: &SceneDesc, name: &str, base: Option<&Path>) -> NdResult<AnyScene> {
-    build_any(desc, base).map_err(|e| locate(&Source::Unlocated(name), None, e))
+    build_desc_with(desc, name, base, None)
+}
+
+/// [`build_desc`], with `reader` reading mesh files of formats other than `.npz`.
+pub fn build_desc_with(
+    desc: &SceneDesc,
+    name: &str,
+    base: Option<&Path>,
+    reader: Option<&dyn MeshReader>,
+) -> NdResult<AnyScene> {
+    build_any(desc, base, reader).map_err(|e| locate(&Source::Unlocated(name), None, e))
 }
 
 /// The description of frame `k` of the scene's `[animation]` (see [`animation`]); errors are
@@ -173,8 +203,12 @@ pub fn to_toml(desc: &SceneDesc) -> NdResult<String> {
     })
 }
 
-fn build_any(desc: &SceneDesc, base: Option<&Path>) -> Result<AnyScene, PathError> {
-    let built = with_dim!(desc.dim, N => build::build::<N>(desc, base).map(|s| {
+fn build_any(
+    desc: &SceneDesc,
+    base: Option<&Path>,
+    reader: Option<&dyn MeshReader>,
+) -> Result<AnyScene, PathError> {
+    let built = with_dim!(desc.dim, N => build::build_with::<N>(desc, base, reader).map(|s| {
         // One conversion from Scene<N> to the enum, through a helper trait.
         <Scene<N> as IntoAny>::into_any(s)
     }));

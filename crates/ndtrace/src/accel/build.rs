@@ -1,0 +1,484 @@
+//! The SAH build of the binary tree (binned, parallel, deterministic) and the public
+//! constructors of [`Bvh`], which collapse it into the wide tree (see `collapse`).
+
+use super::collapse::{id_ranges, wide_tree};
+use super::simplex::{simplex_bounds, Bounds, PreparedSimplex};
+use super::tree::{f32_down, f32_up, half_area, BinaryNode, Bvh, BLOCK_WIDTH, LEAF_TAG, MAX_LEAF};
+use crate::linalg::Vector;
+use crate::mesh::Mesh;
+use rayon::prelude::*;
+
+/// SahBins per axis of the SAH build.
+const BINS: usize = 16;
+/// Below this depth SAH decides the binary splits; deeper, object-median splits bound the depth
+/// (they halve a u32-indexed range, so the binary tree has at most `MAX_SAH_DEPTH + 33` levels).
+pub(super) const MAX_SAH_DEPTH: usize = 48;
+/// Nodes with at least this many simplices are built in parallel (the result does not depend on
+/// it: see [`Bvh::build`]).
+pub(super) const PAR_MIN: usize = 16 * 1024;
+/// Chunk size of the parallel binning passes.
+const PAR_CHUNK: usize = 8 * 1024;
+/// Relative padding of each simplex's box, covering the `BARY_SLACK` band around it (a point
+/// with `t_k ≥ −BARY_SLACK` is at most `BARY_SLACK·diameter` outside the simplex, and
+/// `diameter ≤ √N·max extent ≤ 3·max extent`).
+pub(crate) const BOX_PAD: f64 = 1e-8;
+
+/// The bounding box and the box of the centroids of a set of simplices: what the split of the
+/// node over them needs.
+#[derive(Clone, Copy)]
+struct NodeBounds<const N: usize> {
+    bmin: Vector<N>,
+    bmax: Vector<N>,
+    cmin: Vector<N>,
+    cmax: Vector<N>,
+}
+
+impl<const N: usize> NodeBounds<N> {
+    fn empty() -> Self {
+        NodeBounds {
+            bmin: [f64::INFINITY; N],
+            bmax: [f64::NEG_INFINITY; N],
+            cmin: [f64::INFINITY; N],
+            cmax: [f64::NEG_INFINITY; N],
+        }
+    }
+
+    fn merge(mut self, o: Self) -> Self {
+        for i in 0..N {
+            self.bmin[i] = self.bmin[i].min(o.bmin[i]);
+            self.bmax[i] = self.bmax[i].max(o.bmax[i]);
+            self.cmin[i] = self.cmin[i].min(o.cmin[i]);
+            self.cmax[i] = self.cmax[i].max(o.cmax[i]);
+        }
+        self
+    }
+}
+
+/// One SAH bin: count and bounds of the simplices whose centroid falls in it.
+#[derive(Clone, Copy)]
+struct SahBin<const N: usize> {
+    count: u32,
+    min: Vector<N>,
+    max: Vector<N>,
+}
+
+impl<const N: usize> SahBin<N> {
+    const EMPTY: Self = SahBin {
+        count: 0,
+        min: [f64::INFINITY; N],
+        max: [f64::NEG_INFINITY; N],
+    };
+
+    #[inline]
+    fn grow(&mut self, lo: &Vector<N>, hi: &Vector<N>, count: u32) {
+        self.count += count;
+        for i in 0..N {
+            self.min[i] = self.min[i].min(lo[i]);
+            self.max[i] = self.max[i].max(hi[i]);
+        }
+    }
+}
+
+type SahBins<const N: usize> = [[SahBin<N>; BINS]; N];
+
+/// SAH cost weight of n simplices: the number of blocks they fill, since a block tests up to
+/// 4 simplices at the price of one.
+#[inline]
+fn blocks_of(n: u32) -> f64 {
+    n.div_ceil(BLOCK_WIDTH as u32) as f64
+}
+
+/// The bin of a centroid coordinate: `⌊(c − cmin)·scale⌋` clamped to the last bin. The same
+/// function bins and partitions, so both agree exactly.
+#[inline(always)]
+fn bin_of(c: f64, cmin: f64, scale: f64) -> usize {
+    (((c - cmin) * scale) as usize).min(BINS - 1)
+}
+
+/// Reorders `idx` so that the elements satisfying `left` come first; returns their number.
+fn partition(idx: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+    let (mut i, mut j) = (0, idx.len());
+    loop {
+        while i < j && left(idx[i]) {
+            i += 1;
+        }
+        while i < j && !left(idx[j - 1]) {
+            j -= 1;
+        }
+        if i >= j {
+            return i;
+        }
+        idx.swap(i, j - 1);
+        i += 1;
+        j -= 1;
+    }
+}
+
+/// Build inputs: padded bounds and centroids of every simplex (by input index).
+struct Builder<const N: usize> {
+    bounds: Vec<(Vector<N>, Vector<N>)>,
+    cent: Vec<Vector<N>>,
+    par_min: usize,
+}
+
+/// A binary subtree built in parallel: either a flat run of nodes (child indices relative to its
+/// start) or an inner node over two such subtrees. Flattened once at the end, in depth-first
+/// order, so the layout does not depend on which parts were built in parallel.
+enum BuiltSubtree<const N: usize> {
+    Flat(Vec<BinaryNode<N>>),
+    Split(BinaryNode<N>, Box<BuiltSubtree<N>>, Box<BuiltSubtree<N>>),
+}
+
+impl<const N: usize> Builder<N> {
+    fn info_seq(&self, idx: &[u32]) -> NodeBounds<N> {
+        let mut info = NodeBounds::empty();
+        for &p in idx {
+            let (lo, hi) = &self.bounds[p as usize];
+            let c = &self.cent[p as usize];
+            for i in 0..N {
+                info.bmin[i] = info.bmin[i].min(lo[i]);
+                info.bmax[i] = info.bmax[i].max(hi[i]);
+                info.cmin[i] = info.cmin[i].min(c[i]);
+                info.cmax[i] = info.cmax[i].max(c[i]);
+            }
+        }
+        info
+    }
+
+    /// Bounds and centroid bounds; min/max are exact, so the parallel reduction gives the same
+    /// result as the sequential loop.
+    fn info(&self, idx: &[u32]) -> NodeBounds<N> {
+        if idx.len() >= self.par_min.max(2 * PAR_CHUNK) {
+            idx.par_chunks(PAR_CHUNK)
+                .map(|c| self.info_seq(c))
+                .reduce(NodeBounds::empty, NodeBounds::merge)
+        } else {
+            self.info_seq(idx)
+        }
+    }
+
+    fn bin_seq(&self, idx: &[u32], cmin: &Vector<N>, scale: &Vector<N>) -> SahBins<N> {
+        let mut bins = [[SahBin::EMPTY; BINS]; N];
+        for &p in idx {
+            let (lo, hi) = &self.bounds[p as usize];
+            let c = &self.cent[p as usize];
+            for a in 0..N {
+                if scale[a] > 0.0 {
+                    bins[a][bin_of(c[a], cmin[a], scale[a])].grow(lo, hi, 1);
+                }
+            }
+        }
+        bins
+    }
+
+    /// The SAH bins; counts and min/max are exact, so the parallel reduction is deterministic.
+    fn bins(&self, idx: &[u32], cmin: &Vector<N>, scale: &Vector<N>) -> SahBins<N> {
+        if idx.len() >= self.par_min.max(2 * PAR_CHUNK) {
+            idx.par_chunks(PAR_CHUNK)
+                .map(|c| self.bin_seq(c, cmin, scale))
+                .reduce(
+                    || [[SahBin::EMPTY; BINS]; N],
+                    |mut a, b| {
+                        for ax in 0..N {
+                            for k in 0..BINS {
+                                a[ax][k].grow(&b[ax][k].min, &b[ax][k].max, b[ax][k].count);
+                            }
+                        }
+                        a
+                    },
+                )
+        } else {
+            self.bin_seq(idx, cmin, scale)
+        }
+    }
+
+    /// Chooses how to split the node over `idx` and partitions `idx` accordingly: `None` for a
+    /// leaf (at most `MAX_LEAF` simplices: a block tests them at the price of one), `Some(mid)`
+    /// for children `idx[..mid]` and `idx[mid..]` (both non-empty).
+    fn split(&self, idx: &mut [u32], info: &NodeBounds<N>, depth: usize) -> Option<usize> {
+        let n = idx.len();
+        if n <= MAX_LEAF {
+            return None;
+        }
+        let mut scale = [0.0; N];
+        for a in 0..N {
+            let ext = info.cmax[a] - info.cmin[a];
+            let s = BINS as f64 / ext;
+            if ext > 0.0 && s.is_finite() {
+                scale[a] = s;
+            }
+        }
+        if depth < MAX_SAH_DEPTH && scale.iter().any(|&s| s > 0.0) {
+            let bins = self.bins(idx, &info.cmin, &scale);
+            // (cost, axis, first bin of the right side); ties keep the first candidate.
+            let mut best: Option<(f64, usize, usize)> = None;
+            for a in 0..N {
+                if scale[a] == 0.0 {
+                    continue;
+                }
+                // Suffix sweep: right_cost[s] = area(bins s..) · blocks(bins s..).
+                let mut right_cost = [0.0; BINS];
+                let mut acc = SahBin::EMPTY;
+                for s in (1..BINS).rev() {
+                    let b = &bins[a][s];
+                    acc.grow(&b.min, &b.max, b.count);
+                    right_cost[s] = half_area(&acc.min, &acc.max) * blocks_of(acc.count);
+                }
+                let mut left = SahBin::EMPTY;
+                for s in 1..BINS {
+                    let b = &bins[a][s - 1];
+                    left.grow(&b.min, &b.max, b.count);
+                    let n_left = left.count as usize;
+                    if n_left == 0 || n_left == n {
+                        continue;
+                    }
+                    let cost =
+                        half_area(&left.min, &left.max) * blocks_of(left.count) + right_cost[s];
+                    if best.is_none_or(|(c, _, _)| cost < c) {
+                        best = Some((cost, a, s));
+                    }
+                }
+            }
+            if let Some((_, a, s)) = best {
+                let (cmin, sc) = (info.cmin[a], scale[a]);
+                let mid = partition(idx, |p| bin_of(self.cent[p as usize][a], cmin, sc) < s);
+                debug_assert!(mid > 0 && mid < n);
+                return Some(mid);
+            }
+        }
+        // Object-median split on the axis of largest centroid extent (ties: lowest axis, then
+        // input index), which always splits and halves the count.
+        let mut axis = 0;
+        for a in 1..N {
+            if info.cmax[a] - info.cmin[a] > info.cmax[axis] - info.cmin[axis] {
+                axis = a;
+            }
+        }
+        let mid = n / 2;
+        let cent = &self.cent;
+        idx.select_nth_unstable_by(mid, |&p, &q| {
+            cent[p as usize][axis]
+                .total_cmp(&cent[q as usize][axis])
+                .then(p.cmp(&q))
+        });
+        Some(mid)
+    }
+
+    fn node(info: &NodeBounds<N>) -> BinaryNode<N> {
+        BinaryNode {
+            min: std::array::from_fn(|i| f32_down(info.bmin[i])),
+            max: std::array::from_fn(|i| f32_up(info.bmax[i])),
+            first: 0,
+            count: 0,
+        }
+    }
+
+    /// Sequential build of the subtree over `idx` (at position `offset` of the final order),
+    /// appending to `out` with node indices relative to the start of `out`.
+    fn build_seq(
+        &self,
+        idx: &mut [u32],
+        offset: usize,
+        depth: usize,
+        out: &mut Vec<BinaryNode<N>>,
+    ) {
+        let info = self.info_seq(idx);
+        let me = out.len();
+        out.push(Self::node(&info));
+        match self.split(idx, &info, depth) {
+            None => {
+                out[me].first = offset as u32;
+                out[me].count = idx.len() as u32;
+            }
+            Some(mid) => {
+                let (l, r) = idx.split_at_mut(mid);
+                self.build_seq(l, offset, depth + 1, out);
+                out[me].first = out.len() as u32;
+                self.build_seq(r, offset + mid, depth + 1, out);
+            }
+        }
+    }
+
+    /// Build of the subtree over `idx`, forking with rayon for large nodes.
+    fn build_par(&self, idx: &mut [u32], offset: usize, depth: usize) -> BuiltSubtree<N> {
+        if idx.len() < self.par_min {
+            let mut out = Vec::with_capacity(idx.len() / 2 + 1);
+            self.build_seq(idx, offset, depth, &mut out);
+            return BuiltSubtree::Flat(out);
+        }
+        let info = self.info(idx);
+        let mut node = Self::node(&info);
+        match self.split(idx, &info, depth) {
+            None => {
+                node.first = offset as u32;
+                node.count = idx.len() as u32;
+                BuiltSubtree::Flat(vec![node])
+            }
+            Some(mid) => {
+                let (l, r) = idx.split_at_mut(mid);
+                let (bl, br) = rayon::join(
+                    || self.build_par(l, offset, depth + 1),
+                    || self.build_par(r, offset + mid, depth + 1),
+                );
+                BuiltSubtree::Split(node, Box::new(bl), Box::new(br))
+            }
+        }
+    }
+}
+
+/// Appends a built subtree in depth-first order, rebasing inner nodes' child indices.
+fn flatten<const N: usize>(b: BuiltSubtree<N>, out: &mut Vec<BinaryNode<N>>) {
+    match b {
+        BuiltSubtree::Flat(v) => {
+            let base = out.len() as u32;
+            out.extend(v.into_iter().map(|mut nd| {
+                if nd.count == 0 {
+                    nd.first += base;
+                }
+                nd
+            }));
+        }
+        BuiltSubtree::Split(node, l, r) => {
+            let me = out.len();
+            out.push(node);
+            flatten(*l, out);
+            out[me].first = out.len() as u32;
+            flatten(*r, out);
+        }
+    }
+}
+
+/// The binary SAH tree over the simplices of the given bounds (each padded by [`BOX_PAD`] of
+/// its largest extent), in depth-first order, and the leaf order (`idx[j]`: the input index of
+/// the j-th simplex in leaf order). Forks with rayon above `par_min` simplices.
+pub(super) fn binary_tree<const N: usize>(
+    bounds: Vec<Bounds<N>>,
+    par_min: usize,
+) -> (Vec<BinaryNode<N>>, Vec<u32>) {
+    let n = bounds.len();
+    // Pad each box by BOX_PAD of its largest extent, so that it contains the BARY_SLACK band.
+    let padded: Vec<(Vector<N>, Vector<N>)> = bounds
+        .into_iter()
+        .map(|(lo, hi)| {
+            let ext = (0..N).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
+            let pad = BOX_PAD * ext;
+            (
+                std::array::from_fn(|i| lo[i] - pad),
+                std::array::from_fn(|i| hi[i] + pad),
+            )
+        })
+        .collect();
+    let cent = padded
+        .iter()
+        .map(|(lo, hi)| std::array::from_fn(|i| 0.5 * (lo[i] + hi[i])))
+        .collect();
+    let builder = Builder {
+        bounds: padded,
+        cent,
+        par_min: par_min.max(2),
+    };
+    let mut idx: Vec<u32> = (0..n as u32).collect();
+    let built = builder.build_par(&mut idx, 0, 0);
+    drop(builder);
+    let mut bin = Vec::new();
+    flatten(built, &mut bin);
+    (bin, idx)
+}
+
+impl<const N: usize> Bvh<N> {
+    /// Builds over prepared simplices; `ids[i]` is the caller's id of `prims[i]` (returned in
+    /// [`Hit::prim`](crate::ray::Hit::prim)) and `bounds[i]` the (min, max) corners of its vertices.
+    ///
+    /// Deterministic: every decision depends only on the input (bins are integer counts and
+    /// min/max, exact in any reduction order; ties go to the lowest axis, bin or index), and the
+    /// parallel parts are flattened in depth-first order, so the tree is identical for any
+    /// number of threads.
+    ///
+    /// # Panics
+    /// If the three vectors differ in length or hold 2³¹ or more simplices.
+    pub fn build(
+        prims: Vec<PreparedSimplex<N>>,
+        ids: Vec<u32>,
+        bounds: Vec<([f64; N], [f64; N])>,
+    ) -> Self {
+        Self::build_with(prims, ids, bounds, PAR_MIN)
+    }
+
+    pub(super) fn build_with(
+        prims: Vec<PreparedSimplex<N>>,
+        ids: Vec<u32>,
+        bounds: Vec<([f64; N], [f64; N])>,
+        par_min: usize,
+    ) -> Self {
+        let n = prims.len();
+        assert!(
+            ids.len() == n && bounds.len() == n,
+            "Bvh::build: prims, ids, bounds lengths differ"
+        );
+        assert!(n < LEAF_TAG as usize, "Bvh::build: too many simplices");
+        if n == 0 {
+            return Bvh {
+                nodes: Vec::new(),
+                blocks: Vec::new(),
+                len: 0,
+                reach: 0.0,
+                ranges: Vec::new(),
+            };
+        }
+        let (bin, idx) = binary_tree(bounds, par_min);
+        let (nodes, blocks) = wide_tree(&bin, &idx, &prims, &ids);
+        let root = &bin[0];
+        let reach = (0..N)
+            .map(|i| f64::from(root.min[i].abs()).max(f64::from(root.max[i].abs())))
+            .fold(0.0, f64::max);
+        // Non-finite bounds only widen the slab test (and the shift saturates to infinity).
+        let reach = if reach.is_finite() {
+            reach
+        } else {
+            f64::from(f32::MAX)
+        };
+        let ranges = id_ranges(&nodes, &blocks);
+        Bvh {
+            nodes,
+            blocks,
+            len: n,
+            reach,
+            ranges,
+        }
+    }
+
+    /// Builds over the non-degenerate simplices of `points`, with `ids[i]` the id of
+    /// `points[i]` (degenerate ones are skipped). Preparation runs in parallel.
+    pub fn from_simplices(points: &[[[f64; N]; N]], ids: &[u32]) -> Self {
+        assert_eq!(
+            points.len(),
+            ids.len(),
+            "Bvh::from_simplices: points and ids lengths differ"
+        );
+        let prepared: Vec<(PreparedSimplex<N>, u32, Bounds<N>)> = points
+            .par_iter()
+            .zip(ids.par_iter())
+            .filter_map(|(p, &id)| Some((PreparedSimplex::new(p)?, id, simplex_bounds(p))))
+            .collect();
+        let mut prims = Vec::with_capacity(prepared.len());
+        let mut pids = Vec::with_capacity(prepared.len());
+        let mut bounds = Vec::with_capacity(prepared.len());
+        for (p, id, b) in prepared {
+            prims.push(p);
+            pids.push(id);
+            bounds.push(b);
+        }
+        Self::build(prims, pids, bounds)
+    }
+
+    /// Builds over the non-degenerate simplices of a mesh; a hit's `prim` is the simplex index.
+    pub fn from_mesh(mesh: &Mesh<N>) -> Self {
+        let points: Vec<[[f64; N]; N]> = mesh
+            .simplices
+            .par_iter()
+            .map(|idx| std::array::from_fn(|k| mesh.vertices[idx[k] as usize]))
+            .collect();
+        let ids: Vec<u32> = (0..points.len() as u32).collect();
+        Self::from_simplices(&points, &ids)
+    }
+}

@@ -1,0 +1,102 @@
+//! The portable kernels: the reference the x86_64 kernels are tested against bit for bit, and the
+//! kernels of other targets. Compiled on every target.
+
+use super::super::packet::TraversalRay;
+use super::super::simplex::{dot_pairwise, PreparedRay};
+use super::super::tree::{
+    BlockHits, LeafBlock, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
+};
+use super::super::PreparedSimplex;
+use crate::linalg::{sub, Vector};
+
+impl<const N: usize> TraversalRay<N> {
+    /// Portable version of the x86_64 slab test `slab_sse` (same arithmetic, same results).
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    #[inline(always)]
+    pub(in crate::accel) fn slab_portable(
+        &self,
+        node: &WideNode<N>,
+        lo: f32,
+        hi: f32,
+    ) -> (u32, [f32; NODE_WIDTH]) {
+        let mut tn = [lo; NODE_WIDTH];
+        let mut tf = [hi; NODE_WIDTH];
+        for i in 0..N {
+            let s = self.near[i] & 1;
+            let (bn, bf) = (&node.bounds[s][i], &node.bounds[s ^ 1][i]);
+            for l in 0..NODE_WIDTH {
+                let a = (bn[l] - self.o_near[i]) * self.inv[i];
+                let c = (bf[l] - self.o_far[i]) * self.inv[i];
+                tn[l] = if a > tn[l] { a } else { tn[l] };
+                tf[l] = if c < tf[l] { c } else { tf[l] };
+            }
+        }
+        let mut mask = 0;
+        for l in 0..NODE_WIDTH {
+            let met = tn[l] <= tf[l];
+            mask |= (met as u32) << l;
+            if !met {
+                tn[l] = f32::INFINITY;
+            }
+        }
+        (mask, tn)
+    }
+}
+
+impl<const N: usize> LeafBlock<N> {
+    /// Portable version of the x86_64 block test `hit_sse2` (same arithmetic, same results).
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    #[inline(always)]
+    pub(in crate::accel) fn hit_portable(
+        &self,
+        ray: &PreparedRay<N>,
+        tmin: f64,
+        tmax: f64,
+    ) -> BlockHits<N> {
+        let mut out = BlockHits {
+            mask: 0,
+            t: [0.0; BLOCK_WIDTH],
+            den: [0.0; BLOCK_WIDTH],
+            u: [[0.0; BLOCK_WIDTH]; N],
+        };
+        for l in 0..self.count as usize {
+            let lane = PreparedSimplex {
+                m: std::array::from_fn(|k| std::array::from_fn(|i| self.m[k][i][l])),
+                x0: std::array::from_fn(|i| self.x0[i][l]),
+            };
+            let n = &lane.m[0];
+            let den = dot_pairwise(n, &ray.d);
+            let p = sub(&lane.x0, &ray.o);
+            let num = dot_pairwise(n, &p);
+            let w: Vector<N> = std::array::from_fn(|i| num * ray.d[i] - den * p[i]);
+            out.t[l] = num / den;
+            out.den[l] = den;
+            for k in 1..N {
+                out.u[k][l] = dot_pairwise(&lane.m[k], &w);
+            }
+            out.mask |= (lane.hit(ray, tmin, tmax).is_some() as u32) << l;
+        }
+        out
+    }
+}
+
+/// The bit sets of the slots of `child` holding a leaf or nothing and of those holding nothing.
+#[inline(always)]
+pub(in crate::accel) fn leaf_slots(child: &[u32; NODE_WIDTH]) -> (u32, u32) {
+    let (mut leafy, mut empty) = (0, 0);
+    for (l, &c) in child.iter().enumerate() {
+        leafy |= u32::from(c & LEAF_TAG != 0) << l;
+        empty |= u32::from(c == EMPTY_SLOT) << l;
+    }
+    (leafy, empty)
+}
+
+/// The bit set of the rays q with `t ≤ limit[q]`.
+#[inline(always)]
+pub(in crate::accel) fn within<const P: usize>(t: f32, limit: &[f32; P]) -> u32 {
+    let mut near = 0u32;
+    for (q, &l) in limit.iter().enumerate() {
+        near |= u32::from(t <= l) << q;
+    }
+    near
+}

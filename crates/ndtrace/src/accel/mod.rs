@@ -1,0 +1,89 @@
+//! Ray–simplex intersection and a bounding-volume hierarchy over (N−1)-simplices in R^N.
+//!
+//! The algorithm first, in the order a ray meets it; the speed-ups, which change no result,
+//! after it.
+//!
+//! ## 1. Ray–simplex test (sections "Ray Tracing" and "Barycentric Coordinates"; `simplex.rs`)
+//! A [`PreparedSimplex`] stores the unit normal n̂ of its hyperplane (the direction of the
+//! generalized cross product of `x_1 − x_0 … x_{N−1} − x_0`, eq. 6), the N−1 rows `r_k` of the
+//! pseudo-inverse `(EᵀE)⁻¹Eᵀ` of the edge matrix E (the Gram/Cramer form of the barycentric
+//! coordinates) and the first vertex `x_0`. A ray `X(t) = C + t·d` then meets the simplex
+//! without any per-ray solve, in O(N²):
+//!
+//! * `t = n̂·(x_0 − C) / n̂·d`;
+//! * `t_k = r_k·(X(t) − x_0) = r_k·(C − x_0) + t·(r_k·d)` for k = 1 … N−1, `t_0 = 1 − Σ t_k`;
+//! * it is a hit when t lies in the open interval `(tmin, tmax)` and every `t_k ≥ −BARY_SLACK`
+//!   ([`BARY_SLACK`]: the scale-free slack that keeps closed meshes watertight).
+//!
+//! The inside test is evaluated without waiting for the division: with `p = x_0 − C`,
+//! `w = (n̂·p)·d − (n̂·d)·p = (n̂·d)·(X(t) − x_0)`, so `u_k = r_k·w = (n̂·d)·t_k` and the signs
+//! are compared against `BARY_SLACK·|n̂·d|`; the coordinates `t_k = u_k/(n̂·d)` are divided out
+//! only for the hit returned. Dot products are summed pairwise (short dependency chains).
+//!
+//! A ray is parallel to the hyperplane (and misses) when `|n̂·d| ≤ DEGENERACY_TOLERANCE·|d|`, the
+//! rule of [`crate::geometry::ray_hyperplane`]. Hits are two-sided: orientation is left to shading.
+//!
+//! ## 2. Build: binned SAH (`build.rs`)
+//! [`Bvh::build`] first builds a binary tree of N-D axis-aligned boxes (each simplex's box padded
+//! to hold its `BARY_SLACK` band) with the surface area heuristic, whose weight in N dimensions is
+//! half the (N−1)-measure of a box's boundary (Cauchy's formula): 16 bins per axis over the
+//! centroid bounds, leaves of at most [`MAX_LEAF`] simplices, object-median splits when SAH cannot
+//! split or the tree gets deep. The build is parallel (rayon) for large inputs and produces the
+//! same tree for any number of threads.
+//!
+//! ## 3. Wide collapse (`collapse.rs`)
+//! The binary tree is collapsed into an 8-wide tree by the optimal collapse of Ylitie, Karras and
+//! Laine (a dynamic program that minimises the summed boundary measure of the wide nodes). The
+//! boxes of a node's up to 8 children are stored in `f32`, rounded outward (so conservative);
+//! every leaf is one *block* of up to 4 prepared simplices with their ids (`tree.rs`).
+//!
+//! ## 4. Traversal (`traverse.rs`)
+//! Nearest-first: the children met are visited in order of entry distance, and subtrees whose
+//! entry lies beyond the current best hit are skipped, with an explicit fixed-size stack and no
+//! heap allocation. [`Bvh::closest_hit`] returns the minimum of (t, id) over the accepted hits
+//! (so exact ties are settled by id, whatever the tree's shape); [`Bvh::any_hit`] stops at the
+//! first accepted hit and skips the subtrees whose ids all lie in a given range.
+//!
+//! ## Speed-ups beside it
+//! * Packets (`packet.rs`, `traverse.rs`): rays travel in packets of up to [`PACKET`]
+//!   ([`Bvh::closest_hits`], [`Bvh::any_hits`]; the one-ray calls are packets of one). A node is
+//!   fetched, slab-tested for each ray of the packet that reached it, and sorted once for the
+//!   packet; each stack entry carries the bit set of the rays that met its box (the masks of
+//!   8 rays × 8 children are transposed as an 8×8 bit matrix), and every ray keeps its own best
+//!   hit and culling limit. A ray is tested only against the boxes its own tests led it to, and
+//!   the leaf tests are exact, so every ray's result is the one it gets alone, whichever rays it
+//!   travels with.
+//! * Structure-of-arrays layout (`tree.rs`): a node's child boxes are slab-tested together, a
+//!   block's simplices (`[f64; 4]` per coefficient, one lane per simplex) intersected together.
+//! * SIMD kernels (`kernels/`): the slab and block tests in SSE2, or AVX2 when the CPU has it
+//!   (`kernels/x86_64.rs`), beside their portable versions (`kernels/portable.rs`), which every
+//!   target compiles. Every kernel performs, per lane, exactly the operations of its portable
+//!   twin and of [`PreparedSimplex::intersect`] in the same order (no FMA), so all paths give
+//!   bit-identical results; the tests compare them bit for bit.
+//! * Prefetches of the leaf blocks a packet will test soon (`kernels/mod.rs`).
+
+// 1. The ray–simplex test.
+mod simplex;
+// 2. The SAH build, and the public constructors.
+mod build;
+// 3. The wide collapse.
+mod collapse;
+// 4. The queries.
+mod traverse;
+// The memory layout of the trees, the rays prepared for traversal, the kernels, the counters.
+mod kernels;
+mod packet;
+mod stats;
+mod tree;
+
+#[cfg(test)]
+mod tests;
+
+/// The ray and hit types of the queries, re-exported from [`crate::ray`].
+pub use crate::ray::{Hit, Ray};
+pub(crate) use build::BOX_PAD;
+pub use packet::PACKET;
+pub use simplex::{simplex_bounds, Bounds, PreparedSimplex, BARY_SLACK};
+#[cfg(feature = "traversal-stats")]
+pub use stats::traversal_stats;
+pub use tree::{Bvh, MAX_LEAF};

@@ -1,0 +1,206 @@
+//! The memory layout of the tree: wide nodes of `NODE_WIDTH` child boxes in `f32` (rounded outward),
+//! leaf blocks of `BLOCK_WIDTH` prepared simplices stored structure-of-arrays, the binary nodes of the
+//! build, and the box measure both the build and the collapse minimise.
+
+use super::simplex::bary_from;
+use crate::linalg::Vector;
+
+/// Leaves hold at most this many simplices: the lanes of a block.
+pub const MAX_LEAF: usize = BLOCK_WIDTH;
+/// Lanes of a [`LeafBlock`]: the simplices one block test intersects together (one `f64` lane
+/// each, two SSE2 registers or one AVX2 register per coefficient).
+pub(super) const BLOCK_WIDTH: usize = 4;
+/// Child slots of a [`WideNode`]: the boxes one slab test meets together (one `f32` lane each,
+/// one AVX2 register per plane); also the width of a packet's ray masks.
+pub(super) const NODE_WIDTH: usize = 8;
+/// The bit that tags a child reference as a leaf: `LEAF_TAG | b` is leaf block b, a reference
+/// without it a wide node's index.
+pub(super) const LEAF_TAG: u32 = 1 << 31;
+/// The reference of an unused child slot (its box is empty, so it is never entered). It has the
+/// [`LEAF_TAG`] bit too, so one test sorts slots into inner nodes and the rest.
+pub(super) const EMPTY_SLOT: u32 = u32::MAX;
+
+/// A wide node: the boxes of its up to `NODE_WIDTH` children, structure-of-arrays, and the child
+/// references.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub(super) struct WideNode<const N: usize> {
+    /// `bounds[0][axis][lane]` = min corner, `bounds[1][axis][lane]` = max corner (f32 rounded outward;
+    /// +∞/−∞ for an empty slot).
+    pub(super) bounds: [[[f32; NODE_WIDTH]; N]; 2],
+    /// A node index, `LEAF_TAG | block index`, or `EMPTY_SLOT`.
+    pub(super) child: [u32; NODE_WIDTH],
+}
+
+impl<const N: usize> WideNode<N> {
+    /// A node with every slot unused.
+    pub(super) const EMPTY: Self = WideNode {
+        bounds: [
+            [[f32::INFINITY; NODE_WIDTH]; N],
+            [[f32::NEG_INFINITY; NODE_WIDTH]; N],
+        ],
+        child: [EMPTY_SLOT; NODE_WIDTH],
+    };
+}
+
+/// A leaf: up to [`BLOCK_WIDTH`] prepared simplices, structure-of-arrays (lane = simplex). `x0` and `n̂`, all
+/// that a test reads before its early exit, come first and lie together.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
+pub(super) struct LeafBlock<const N: usize> {
+    /// `x0[i][lane]`.
+    pub(super) x0: [[f64; BLOCK_WIDTH]; N],
+    /// `m[0][i][lane]` = n̂_i, `m[k][i][lane]` = (r_k)_i; zero in unused lanes (which then miss as
+    /// parallel rays).
+    pub(super) m: [[[f64; BLOCK_WIDTH]; N]; N],
+    /// The caller's ids.
+    pub(super) ids: [u32; BLOCK_WIDTH],
+    /// Lanes in use.
+    pub(super) count: u32,
+}
+
+/// Largest f32 ≤ x.
+#[inline]
+pub(super) fn f32_down(x: f64) -> f32 {
+    let f = x as f32;
+    if f as f64 > x {
+        f.next_down()
+    } else {
+        f
+    }
+}
+
+/// Smallest f32 ≥ x.
+#[inline]
+pub(super) fn f32_up(x: f64) -> f32 {
+    let f = x as f32;
+    // Without a branch (it would go each way half the time): one step up is one ulp away from
+    // zero for f ≥ +0 and towards zero for f < 0 (−∞ steps to −f32::MAX). −0 never steps
+    // (x ≤ 0 when it rounds to −0), nor do +∞ and NaN (the comparison is false).
+    let step = u32::from((f as f64) < x);
+    let bits = f.to_bits();
+    let neg = bits >> 31;
+    f32::from_bits(bits.wrapping_add(step).wrapping_sub(2 * (step & neg)))
+}
+
+/// Result of a block test: bit mask of the lanes hit, and per lane t, `n̂·d` and
+/// `u[k][lane] = (n̂·d)·t_k` (k ≥ 1), meaningful for the lanes hit.
+pub(super) struct BlockHits<const N: usize> {
+    pub(super) mask: u32,
+    pub(super) t: [f64; BLOCK_WIDTH],
+    pub(super) den: [f64; BLOCK_WIDTH],
+    pub(super) u: [[f64; BLOCK_WIDTH]; N],
+}
+
+impl<const N: usize> BlockHits<N> {
+    /// Barycentric coordinates of lane l, as [`PreparedSimplex::intersect`](super::PreparedSimplex::intersect) computes them.
+    #[inline(always)]
+    pub(super) fn bary(&self, l: usize) -> [f64; N] {
+        bary_from(&std::array::from_fn(|k| self.u[k][l]), self.den[l])
+    }
+}
+
+impl<const N: usize> LeafBlock<N> {
+    /// Bytes of `x0` and `m[0]` (n̂), which lead the block: all that a test reads before its
+    /// early exit.
+    pub(super) const HEAD: usize = 2 * N * BLOCK_WIDTH * size_of::<f64>();
+}
+
+/// A bounding-volume hierarchy over prepared simplices (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bvh<const N: usize> {
+    /// Wide nodes in depth-first order; the root is node 0 (none when empty).
+    pub(super) nodes: Vec<WideNode<N>>,
+    /// Leaves, in leaf order.
+    pub(super) blocks: Vec<LeafBlock<N>>,
+    /// Number of simplices.
+    pub(super) len: usize,
+    /// Bound on |coordinate| of every box of the tree (for the slab test's error bound).
+    pub(super) reach: f64,
+    /// Per node, per child slot: the smallest (`[0]`) and largest (`[1]`) id in the child's
+    /// subtree (`u32::MAX`, 0 for an empty slot), so that an any-hit query told to skip a range
+    /// of ids ([`Bvh::any_hit`]) leaves out the subtrees that hold nothing else.
+    pub(super) ranges: Vec<[[u32; NODE_WIDTH]; 2]>,
+}
+
+/// A binary node of the build: f32 bounds rounded outward and either two children (the left
+/// one next, `first` the right one) or a leaf range `first .. first + count` (count > 0).
+#[derive(Clone, Copy)]
+pub(super) struct BinaryNode<const N: usize> {
+    pub(super) min: [f32; N],
+    pub(super) max: [f32; N],
+    pub(super) first: u32,
+    pub(super) count: u32,
+}
+
+/// Half the (N−1)-measure of a box's boundary, `Σ_i Π_{j≠i} extent_j` (half the perimeter in
+/// 2D, half the surface area in 3D). By Cauchy's formula the probability that a random line
+/// meets a convex body is proportional to its boundary measure, which makes this the SAH weight
+/// in every N. An empty box (min > max) has measure 0.
+pub(super) fn half_area<const N: usize>(min: &Vector<N>, max: &Vector<N>) -> f64 {
+    let e: Vector<N> = std::array::from_fn(|i| (max[i] - min[i]).max(0.0));
+    let mut s = 0.0;
+    for i in 0..N {
+        let mut p = 1.0;
+        for j in 0..N {
+            if j != i {
+                p *= e[j];
+            }
+        }
+        s += p;
+    }
+    s
+}
+
+impl<const N: usize> Bvh<N> {
+    /// Number of simplices.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether there are no simplices.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Number of (8-wide) nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Number of leaves (blocks of up to 4 simplices).
+    pub fn leaf_count(&self) -> usize {
+        self.blocks.len()
+    }
+
+    /// Memory used by nodes + prims (the leaf blocks, with their ids), in bytes.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len()
+            * (std::mem::size_of::<WideNode<N>>() + std::mem::size_of::<[[u32; NODE_WIDTH]; 2]>())
+            + self.blocks.len() * std::mem::size_of::<LeafBlock<N>>()
+    }
+
+    /// Depth of the 8-wide tree counting the leaf level (0 when empty).
+    pub fn depth(&self) -> usize {
+        fn rec<const N: usize>(nodes: &[WideNode<N>], i: usize) -> usize {
+            let deepest = nodes[i]
+                .child
+                .iter()
+                .map(|&c| {
+                    if c == EMPTY_SLOT || c & LEAF_TAG != 0 {
+                        1
+                    } else {
+                        rec(nodes, c as usize)
+                    }
+                })
+                .max()
+                .unwrap_or(0);
+            1 + deepest
+        }
+        if self.nodes.is_empty() {
+            0
+        } else {
+            rec(&self.nodes, 0)
+        }
+    }
+}

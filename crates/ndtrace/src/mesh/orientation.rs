@@ -1,0 +1,543 @@
+//! Orientation of simplicial meshes: whether neighbouring simplices agree, and its repair.
+//!
+//! A simplex's orientation is the order of its vertices: its normal is the generalized cross
+//! product of `x_1 − x_0 … x_{N−1} − x_0` (eq. 6), and swapping two vertices negates it. Two
+//! simplices sharing a ridge (N−1 common vertices) are **consistently oriented** when they
+//! induce opposite orientations on it, as the two triangles of a square `[a, b, c]`,
+//! `[a, c, d]` do on their diagonal `ac`. A mesh is **closed** when every ridge belongs to
+//! exactly two simplices; a closed, consistently oriented mesh bounds a region, and its normals
+//! point **outward** when the volume they enclose,
+//! `V = Σ_s N_s·(x_0 − c) / N!` (divergence theorem; N_s the unnormalized normal of eq. 6, c any
+//! point), is positive.
+//!
+//! [`ridges`] matches the simplices along their ridges; [`orient`] makes every connected piece
+//! consistent by a breadth-first walk over ridge neighbours, then outward (V > 0) where the piece
+//! is closed, or as close to the given orientation as possible where it has a boundary.
+//! Simplices with a repeated vertex index have no orientation and are left out of both.
+
+use super::Mesh;
+use crate::geometry::simplex_normal;
+use crate::linalg::{add, dot, scale, sub};
+use crate::{with_dim, NdError, NdResult};
+use rayon::prelude::*;
+use std::collections::VecDeque;
+
+/// The ridge of a simplex opposite its slot k: a hash of its sorted vertex indices, those
+/// indices (padded with `u32::MAX`), and the orientation the simplex induces on it (the parity
+/// of k plus that of the sort).
+#[inline]
+pub(crate) fn ridge<const N: usize>(idx: &[u32; N], k: usize) -> (u64, [u32; N], bool) {
+    let mut key = [u32::MAX; N];
+    let mut m = 0;
+    for (j, &v) in idx.iter().enumerate() {
+        if j != k {
+            key[m] = v;
+            m += 1;
+        }
+    }
+    let mut odd = k % 2 == 1;
+    for a in 0..N - 1 {
+        for b in a + 1..N - 1 {
+            odd ^= key[a] > key[b];
+        }
+    }
+    key[..N - 1].sort_unstable();
+    let mut h = 0x9e37_79b9_7f4a_7c15u64;
+    for &v in &key[..N - 1] {
+        h = (h ^ u64::from(v)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        h ^= h >> 31;
+    }
+    (h, key, odd)
+}
+
+/// How a mesh's simplices meet along their ridges.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Ridges {
+    /// Each ridge shared by two simplices: (a, b, whether they induce opposite orientations on
+    /// it, i.e. agree), with a < b, sorted.
+    pub pairs: Vec<(u32, u32, bool)>,
+    /// The simplex of each ridge that no other simplex shares (the mesh's boundary), sorted.
+    pub boundary: Vec<u32>,
+    /// Simplices left out because a vertex index repeats in them.
+    pub degenerate: Vec<u32>,
+}
+
+impl Ridges {
+    /// Every ridge is shared by exactly two simplices (and no simplex was left out).
+    pub fn closed(&self) -> bool {
+        self.boundary.is_empty() && self.degenerate.is_empty()
+    }
+
+    /// Every pair of neighbours agrees.
+    pub fn consistent(&self) -> bool {
+        self.pairs.iter().all(|p| p.2)
+    }
+}
+
+/// Why a mesh's orientation cannot be repaired.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum OrientError {
+    /// A ridge (its sorted vertex indices) belongs to more than two simplices.
+    NonManifold { ridge: Vec<u32>, simplices: usize },
+    /// No orientation of the piece containing this simplex makes all its neighbours agree (a
+    /// Möbius strip or Klein bottle).
+    NonOrientable { simplex: usize },
+}
+
+impl std::fmt::Display for OrientError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            OrientError::NonManifold { ridge, simplices } => write!(
+                f,
+                "the ridge with vertices {ridge:?} belongs to {simplices} simplices (at most 2 can be oriented consistently)"
+            ),
+            OrientError::NonOrientable { simplex } => write!(
+                f,
+                "the piece containing simplex {simplex} is not orientable (like a Möbius strip): no orientation makes all its neighbours agree"
+            ),
+        }
+    }
+}
+
+/// Matches the simplices of `mesh` along their ridges, in time O(S·N²·log S).
+pub fn ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
+    let s = &mesh.simplices;
+    let repeated = |idx: &[u32; N]| (1..N).any(|a| idx[..a].contains(&idx[a]));
+    let degenerate: Vec<u32> = (0..s.len() as u32)
+        .filter(|&i| repeated(&s[i as usize]))
+        .collect();
+    // (hash of the ridge, simplex·N + omitted slot), sorted so that a ridge's simplices are
+    // neighbours; a run of equal hashes is then split by the ridges' actual vertices.
+    let mut slots: Vec<(u64, u64)> = (0..s.len() * N)
+        .into_par_iter()
+        .filter(|&r| !repeated(&s[r / N]))
+        .map(|r| (ridge(&s[r / N], r % N).0, r as u64))
+        .collect();
+    slots.par_sort_unstable();
+    let mut pairs = vec![];
+    let mut boundary = vec![];
+    let mut run: Vec<([u32; N], bool, u32)> = vec![];
+    for chunk in slots.chunk_by(|a, b| a.0 == b.0) {
+        run.clear();
+        run.extend(chunk.iter().map(|&(_, r)| {
+            let (simplex, slot) = ((r / N as u64) as usize, (r % N as u64) as usize);
+            let (_, key, odd) = ridge(&s[simplex], slot);
+            (key, odd, simplex as u32)
+        }));
+        run.sort_unstable();
+        for same in run.chunk_by(|a, b| a.0 == b.0) {
+            match same {
+                [(_, _, a)] => boundary.push(*a),
+                [(_, odd_a, a), (_, odd_b, b)] => {
+                    pairs.push(((*a).min(*b), (*a).max(*b), odd_a != odd_b))
+                }
+                more => {
+                    return Err(OrientError::NonManifold {
+                        ridge: more[0].0[..N - 1].to_vec(),
+                        simplices: more.len(),
+                    })
+                }
+            }
+        }
+    }
+    pairs.par_sort_unstable();
+    boundary.par_sort_unstable();
+    Ok(Ridges {
+        pairs,
+        boundary,
+        degenerate,
+    })
+}
+
+/// One connected piece of a mesh (simplices linked through shared ridges), as [`orient`] found
+/// it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Piece {
+    /// Its simplices.
+    pub simplices: usize,
+    /// Every ridge of its simplices is shared with another of them.
+    pub closed: bool,
+    /// Its neighbours all agreed as given.
+    pub consistent: bool,
+    /// How many of its simplices [`orient`] flips.
+    pub flipped: usize,
+}
+
+/// A consistent orientation: which simplices to flip (swap two vertices of), and the pieces.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Repair {
+    /// Per simplex: whether it must be flipped.
+    pub flip: Vec<bool>,
+    /// The connected pieces, in the order of their first simplex.
+    pub pieces: Vec<Piece>,
+}
+
+impl Repair {
+    /// Number of simplices flipped.
+    pub fn flipped(&self) -> usize {
+        self.pieces.iter().map(|p| p.flipped).sum()
+    }
+
+    /// Applies the repair to `mesh` (which must be the mesh it was computed for): each flipped
+    /// simplex has its first two vertices swapped.
+    pub fn apply<const N: usize>(&self, mesh: &mut Mesh<N>) {
+        for (idx, &f) in mesh.simplices.iter_mut().zip(&self.flip) {
+            if f {
+                idx.swap(0, 1);
+            }
+        }
+    }
+}
+
+/// The flips that orient every connected piece of `mesh` consistently: a breadth-first walk
+/// over ridge neighbours from the piece's first simplex fixes each neighbour's flip so that the
+/// two agree; then a closed piece is turned outward (its enclosed volume V, module docs,
+/// positive) and a piece with a boundary keeps the orientation of the majority of its
+/// simplices. Already consistent, outward pieces are left unchanged.
+pub fn orient<const N: usize>(mesh: &Mesh<N>) -> Result<Repair, OrientError> {
+    let r = ridges(mesh)?;
+    let count = mesh.simplices.len();
+    // Neighbour lists (compressed rows), with whether the pair agrees.
+    let mut start = vec![0usize; count + 1];
+    for &(a, b, _) in &r.pairs {
+        start[a as usize + 1] += 1;
+        start[b as usize + 1] += 1;
+    }
+    for i in 0..count {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut next = vec![(0u32, false); start[count]];
+    for &(a, b, agree) in &r.pairs {
+        next[fill[a as usize]] = (b, agree);
+        fill[a as usize] += 1;
+        next[fill[b as usize]] = (a, agree);
+        fill[b as usize] += 1;
+    }
+    let mut open = vec![false; count];
+    for &b in r.boundary.iter().chain(&r.degenerate) {
+        open[b as usize] = true;
+    }
+    let mut flip = vec![false; count];
+    let mut seen = vec![false; count];
+    for &d in &r.degenerate {
+        seen[d as usize] = true;
+    }
+    let mut pieces = vec![];
+    let mut queue = VecDeque::new();
+    let mut members = vec![];
+    for seed in 0..count {
+        if seen[seed] {
+            continue;
+        }
+        // 1. Walk the piece: a neighbour that agrees takes the same flip, one that does not
+        //    the opposite one; meeting a simplex again with the other flip is a contradiction.
+        seen[seed] = true;
+        queue.push_back(seed);
+        members.clear();
+        let (mut closed, mut consistent) = (true, true);
+        while let Some(a) = queue.pop_front() {
+            members.push(a);
+            closed &= !open[a];
+            for &(b, agree) in &next[start[a]..start[a + 1]] {
+                let b = b as usize;
+                consistent &= agree;
+                let want = flip[a] ^ !agree;
+                if !seen[b] {
+                    seen[b] = true;
+                    flip[b] = want;
+                    queue.push_back(b);
+                } else if flip[b] != want {
+                    return Err(OrientError::NonOrientable { simplex: seed });
+                }
+            }
+        }
+        members.sort_unstable();
+        // 2. Outward (closed) or the majority's orientation (open).
+        let turn = if closed {
+            enclosed_volume(mesh, &members, &flip) < 0.0
+        } else {
+            2 * members.iter().filter(|&&m| flip[m]).count() > members.len()
+        };
+        if turn {
+            for &m in &members {
+                flip[m] = !flip[m];
+            }
+        }
+        pieces.push(Piece {
+            simplices: members.len(),
+            closed,
+            consistent,
+            flipped: members.iter().filter(|&&m| flip[m]).count(),
+        });
+    }
+    Ok(Repair { flip, pieces })
+}
+
+/// N!·V of the simplices `members` with the orientations `flip` (module docs), about the mean
+/// of their centroids, summed in simplex order.
+fn enclosed_volume<const N: usize>(mesh: &Mesh<N>, members: &[usize], flip: &[bool]) -> f64 {
+    let mut sum = [0.0; N];
+    for &m in members {
+        for p in mesh.simplex_points(m) {
+            sum = add(&sum, &p);
+        }
+    }
+    let c = scale(&sum, 1.0 / (members.len() * N) as f64);
+    members
+        .iter()
+        .map(|&m| {
+            let p = mesh.simplex_points(m);
+            let v = dot(&simplex_normal(&p), &sub(&p[0], &c));
+            if flip[m] {
+                -v
+            } else {
+                v
+            }
+        })
+        .sum()
+}
+
+/// The load-time check of a mesh object: `Some((flipped, simplices))` when the mesh is closed
+/// and some piece of it is not consistently oriented, with the number of simplices of such
+/// pieces that [`orient`] flips (those facing inward); `None` for an open or consistent mesh.
+/// A closed mesh that cannot be oriented gives `Some((0, simplices))`.
+pub fn inconsistency<const N: usize>(mesh: &Mesh<N>) -> Option<(usize, usize)> {
+    let r = ridges(mesh).ok()?;
+    if !r.closed() || r.consistent() {
+        return None;
+    }
+    let count = mesh.simplices.len();
+    match orient(mesh) {
+        Ok(repair) => Some((
+            repair
+                .pieces
+                .iter()
+                .filter(|p| !p.consistent)
+                .map(|p| p.flipped)
+                .sum(),
+            count,
+        )),
+        Err(_) => Some((0, count)),
+    }
+}
+
+/// [`orient`] for a runtime dimension `dim`, over row-major buffers of vertices (V, dim) and
+/// simplices (S, dim): which simplices to flip. Errors name the argument.
+pub fn orient_rows(dim: usize, vertices: &[f64], simplices: &[u32]) -> NdResult<Vec<bool>> {
+    with_dim!(dim, N => {
+        let shape = |arg: &str, len: usize| NdError::Shape {
+            arg: arg.into(),
+            expected: format!("a multiple of {N} values"),
+            got: format!("{len}"),
+        };
+        if !vertices.len().is_multiple_of(N) {
+            return Err(shape("vertices", vertices.len()));
+        }
+        if !simplices.len().is_multiple_of(N) {
+            return Err(shape("simplices", simplices.len()));
+        }
+        let nv = vertices.len() / N;
+        if let Some(i) = simplices.iter().position(|&k| k as usize >= nv) {
+            return Err(NdError::Value {
+                arg: format!("simplices[{}][{}]", i / N, i % N),
+                message: format!("vertex index {} out of range: there are {nv} vertices", simplices[i]),
+            });
+        }
+        let mesh = Mesh::<N> {
+            vertices: vertices.chunks_exact(N).map(|v| std::array::from_fn(|k| v[k])).collect(),
+            simplices: simplices.chunks_exact(N).map(|s| std::array::from_fn(|k| s[k])).collect(),
+        };
+        orient(&mesh).map(|r| r.flip).map_err(|e| NdError::Value {
+            arg: "simplices".into(),
+            message: e.to_string(),
+        })
+    })?
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::linalg::{mat_vec, Vector};
+    use crate::shapes::{cross_polytope, hypercube, simplex_boundary, sphere};
+    use crate::testutil::{for_each_dim, random_rotation, rng};
+    use rand::Rng;
+
+    /// N!·V of the whole mesh as it stands.
+    fn volume<const N: usize>(mesh: &Mesh<N>) -> f64 {
+        let all: Vec<usize> = (0..mesh.simplices.len()).collect();
+        enclosed_volume(mesh, &all, &vec![false; all.len()])
+    }
+
+    fn shapes<const N: usize>() -> Vec<Mesh<N>> {
+        let mut list = vec![
+            simplex_boundary::<N>(),
+            hypercube::<N>(),
+            cross_polytope::<N>(),
+        ];
+        if N <= 6 {
+            list.push(sphere::<N>(1));
+        }
+        list
+    }
+
+    fn generated_shapes_are_closed_consistent_and_outward<const N: usize>() {
+        for mesh in shapes::<N>() {
+            let r = ridges(&mesh).unwrap();
+            assert!(r.closed() && r.consistent(), "N = {N}");
+            assert_eq!(r.pairs.len(), mesh.simplices.len() * N / 2);
+            assert!(volume(&mesh) > 0.0);
+            let repair = orient(&mesh).unwrap();
+            assert_eq!(repair.flipped(), 0, "N = {N}");
+            assert_eq!(inconsistency(&mesh), None);
+        }
+    }
+
+    #[test]
+    fn generated_shapes_need_no_repair() {
+        for_each_dim!(generated_shapes_are_closed_consistent_and_outward);
+    }
+
+    /// The hypercube's enclosed volume is 2^N: V = Σ N·(x_0 − c)/N! is the divergence theorem.
+    #[test]
+    fn enclosed_volume_is_the_volume() {
+        fn check<const N: usize>() {
+            let v = volume(&hypercube::<N>()) / (1..=N).map(|k| k as f64).product::<f64>();
+            assert!((v - 2f64.powi(N as i32)).abs() < 1e-9, "N = {N}: {v}");
+        }
+        for_each_dim!(check);
+    }
+
+    fn scrambled_meshes_are_repaired<const N: usize>() {
+        let mut r = rng(40 + N as u64);
+        for (k, mut mesh) in shapes::<N>().into_iter().enumerate() {
+            // A rotated, shifted copy, then a random set of simplices flipped (a random swap).
+            let m = random_rotation::<N>(&mut r);
+            for v in &mut mesh.vertices {
+                *v = add(&mat_vec(&m, v), &[0.3; N]);
+            }
+            let good = mesh.clone();
+            let mut flipped = 0;
+            for idx in &mut mesh.simplices {
+                if r.random_bool(0.4) {
+                    let a = r.random_range(0..N);
+                    let b = (a + r.random_range(1..N)) % N;
+                    idx.swap(a, b);
+                    flipped += 1;
+                }
+            }
+            if flipped == 0 {
+                continue;
+            }
+            assert_eq!(
+                inconsistency(&mesh),
+                (flipped < mesh.simplices.len()).then_some((flipped, mesh.simplices.len())),
+                "N = {N}, shape {k}"
+            );
+            let repair = orient(&mesh).unwrap();
+            assert_eq!(repair.flipped(), flipped);
+            repair.apply(&mut mesh);
+            // Every simplex has the orientation of the original (the same normal).
+            for s in 0..mesh.simplices.len() {
+                let (a, b) = (
+                    simplex_normal(&mesh.simplex_points(s)),
+                    simplex_normal(&good.simplex_points(s)),
+                );
+                assert!(dot(&a, &b) > 0.0, "N = {N}, shape {k}, simplex {s}");
+            }
+            assert_eq!(orient(&mesh).unwrap().flipped(), 0);
+        }
+    }
+
+    #[test]
+    fn scrambled_orientations_are_found_and_repaired() {
+        for_each_dim!(scrambled_meshes_are_repaired);
+    }
+
+    #[test]
+    fn an_inward_mesh_is_turned_and_pieces_are_separate() {
+        // Two tetrahedra's boundaries apart: one inward (consistent), one outward.
+        let a = simplex_boundary::<3>();
+        let mut mesh = a.clone();
+        for idx in &mut mesh.simplices {
+            idx.swap(1, 2);
+        }
+        let offset = mesh.vertices.len() as u32;
+        mesh.vertices
+            .extend(a.vertices.iter().map(|v| add(v, &[5.0, 0.0, 0.0])));
+        mesh.simplices
+            .extend(a.simplices.iter().map(|s| s.map(|i| i + offset)));
+        // Consistent (each piece is), so no warning; orient turns the first piece.
+        assert_eq!(inconsistency(&mesh), None);
+        let repair = orient(&mesh).unwrap();
+        assert_eq!(repair.pieces.len(), 2);
+        assert_eq!(
+            repair.pieces[0],
+            Piece {
+                simplices: 4,
+                closed: true,
+                consistent: true,
+                flipped: 4
+            }
+        );
+        assert_eq!(repair.pieces[1].flipped, 0);
+    }
+
+    #[test]
+    fn open_meshes_keep_the_majority_and_odd_meshes_are_errors() {
+        // A strip of three triangles, the middle one reversed: it is flipped back.
+        let v: Vec<Vector<3>> = (0..5)
+            .map(|i| [i as f64 * 0.5, (i % 2) as f64, 0.0])
+            .collect();
+        let mut mesh = Mesh {
+            vertices: v,
+            simplices: vec![[0, 1, 2], [2, 1, 3], [2, 3, 4]],
+        };
+        mesh.simplices[1].swap(0, 1);
+        let r = ridges(&mesh).unwrap();
+        assert!(!r.closed() && !r.consistent());
+        assert_eq!(inconsistency(&mesh), None); // open: no warning
+        let repair = orient(&mesh).unwrap();
+        assert_eq!(repair.flip, vec![false, true, false]);
+        // Three triangles on one edge.
+        let fan = Mesh {
+            vertices: vec![
+                [0.0; 3],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [0.0, -1.0, 0.0],
+            ],
+            simplices: vec![[0, 1, 2], [1, 0, 3], [0, 1, 4]],
+        };
+        assert_eq!(
+            orient(&fan),
+            Err(OrientError::NonManifold {
+                ridge: vec![0, 1],
+                simplices: 3
+            })
+        );
+        // A Möbius strip of 5 triangles.
+        let n = 5u32;
+        let mob = Mesh {
+            vertices: (0..n)
+                .map(|i| {
+                    let t = i as f64;
+                    [t.cos(), t.sin(), 0.0]
+                })
+                .collect(),
+            simplices: (0..n).map(|i| [i, (i + 1) % n, (i + 2) % n]).collect(),
+        };
+        assert!(matches!(
+            orient(&mob),
+            Err(OrientError::NonOrientable { .. })
+        ));
+        // A repeated index leaves its simplex out: the mesh is no longer closed.
+        let mut tet = simplex_boundary::<3>();
+        tet.simplices.push([0, 0, 1]);
+        let r = ridges(&tet).unwrap();
+        assert_eq!(r.degenerate, vec![4]);
+        assert!(!r.closed() && r.consistent());
+        assert_eq!(orient(&tet).unwrap().flip, vec![false; 5]);
+    }
+}
