@@ -12,12 +12,15 @@ docstring, ``crates/ndtrace/src/composite.rs``):
 
 from __future__ import annotations
 
+import importlib
 import math
 
 import numpy as np
 import pytest
 
 import ndtrace
+
+composite_module = importlib.import_module("ndtrace.composite")
 
 
 @pytest.fixture(scope="module")
@@ -224,6 +227,18 @@ def test_bad_options_raise_value_errors_naming_the_argument(kwargs, name):
         ndtrace.composite(rgba, **kwargs)
 
 
+def test_wrongly_typed_keywords_say_what_was_expected():
+    rgba = np.zeros((4, 4, 4, 4), np.float32)
+    for kwargs, message in [(dict(azimuth="30"), "azimuth: expected a number, got str"),
+                            (dict(size=(10.5, 10)), "size[0]: expected an integer, got float"),
+                            (dict(axis=-1), "axis: integer out of range: expected a non-negative integer"),
+                            (dict(size=(10,)), "size: expected sequence of length 2, got 1"),
+                            (dict(mode="volumes"), 'mode: unknown mode "volumes" (did you mean "volume"?)')]:
+        with pytest.raises(ValueError) as e:
+            ndtrace.composite(rgba, **kwargs)
+        assert str(e.value).startswith(message), e.value
+
+
 @pytest.mark.parametrize(
     "retina",
     [np.zeros((4, 4, 3), np.float32), np.zeros((4,), np.float32), np.zeros((1,) * 8 + (4,), np.float32),
@@ -240,5 +255,75 @@ def test_the_binding_checks_shapes_too():
         ndtrace._ndtrace.composite(np.zeros((2, 2, 2, 4), np.float32), np.zeros((2, 2), np.float32))
     with pytest.raises(ValueError, match="retina"):
         ndtrace._ndtrace.composite(np.zeros((2, 2, 2, 3), np.float32))
-    with pytest.raises(ValueError, match="mode"):
-        ndtrace._ndtrace.composite(np.zeros((2, 2, 2, 4), np.float32), mode="x")
+    with pytest.raises(ValueError, match="^mode: unknown mode \"x\""):
+        ndtrace._ndtrace.composite(np.zeros((2, 2, 2, 4), np.float32), None, {"mode": "x"})
+    with pytest.raises(ValueError, match="^options: "):
+        ndtrace._ndtrace.composite(np.zeros((2, 2, 2, 4), np.float32), None, ["volume"])
+    with pytest.raises(ValueError, match='unknown key "zooom" \\(did you mean "zoom"\\?\\)'):
+        ndtrace._ndtrace.composite(np.zeros((2, 2, 2, 4), np.float32), None, {"zooom": 2})
+
+
+def test_keyword_defaults_are_the_cores():
+    """``ndtrace.composite``'s keywords are the core's options with the core's defaults (None
+    stands for the core's black background and default stages, as documented)."""
+    import inspect
+
+    core = ndtrace._ndtrace.composite_defaults()
+    params = inspect.signature(ndtrace.composite).parameters
+    keywords = {k: p.default for k, p in params.items() if p.kind is p.KEYWORD_ONLY and k != "threads"}
+    assert sorted(keywords) == sorted(core)
+    assert list(core)[:3] == ["mode", "azimuth", "elevation"]  # the fields' order
+    documented_none = {"background": [0.0, 0.0, 0.0], "stages": []}
+    for key, default in keywords.items():
+        if default is None:
+            assert list(core[key]) == documented_none[key], key
+        else:
+            assert (list(default) if isinstance(default, tuple) else default) == (
+                list(core[key]) if isinstance(core[key], tuple) else core[key]), key
+    # The constants are the core's names.
+    assert composite_module.MODES == ("volume", "mip", "first_hit", "slices") == ndtrace._ndtrace.COMPOSITE_MODES
+    assert composite_module.PROJECTIONS == ("perspective", "orthographic")
+    assert core["mode"] in composite_module.MODES
+
+
+def test_a_bad_option_reads_the_same_as_a_keyword_a_dict_key_and_in_a_scene_file():
+    rgba = np.zeros((4, 4, 4, 4), np.float32)
+    scene = ndtrace.load_file("scenes/tesseract.toml").to_dict()
+    text = open("scenes/tesseract.toml").read()
+    for key, value, toml_value in [("opacity", -1, "-1"), ("step", 5.0, "5.0"), ("size", [0, 4], "[0, 4]"),
+                                   ("distance", 0.5, "0.5"), ("background", [0, float("inf"), 0], "[0, inf, 0]"),
+                                   ("zoom", 0, "0")]:
+        with pytest.raises(ValueError) as keyword:
+            ndtrace.composite(rgba, **{key: value})
+        message = str(keyword.value)
+        assert message.startswith(key), message
+        with pytest.raises(ValueError) as from_dict:
+            ndtrace.load_dict({**scene, "composite": {key: value}})
+        assert str(from_dict.value) == f"<dict>: composite.{message}"
+        bad = text + f"\n[composite]\n{key} = {toml_value}\n"
+        with pytest.raises(ValueError) as from_file:
+            ndtrace.load_toml(bad, name="t.toml")
+        line = bad.count("\n")
+        assert str(from_file.value).startswith(f"t.toml:{line}:"), from_file.value
+        assert str(from_file.value).endswith(f": composite.{message}")
+
+
+def test_the_composite_table_takes_every_keyword_and_is_written_back_as_given():
+    text = open("scenes/simplex4.toml").read()
+    extra = ("zoom = 1.5\nstep = 0.25\nbackground = [0.1, 0.2, 0.3]\nstrip_height = 9\n"
+             "labels = false\n")
+    scene = ndtrace.load_toml(text.replace("opacity = 0.6\n", "opacity = 0.6\n" + extra))
+    table = scene.to_dict()["composite"]
+    assert table == {"mode": "volume", "zoom": 1.5, "opacity": 0.6, "step": 0.25,
+                     "background": (0.1, 0.2, 0.3), "strip_height": 9, "labels": False}
+    options = composite_module.scene_options(scene.to_dict())
+    assert options["background"] == (0.1, 0.2, 0.3)  # the table's, not the scene's
+    # The given default mode = "volume" stays; nothing else is added.
+    assert scene.to_toml().split("[composite]\n")[1].split("\n\n")[0].splitlines() == [
+        'mode = "volume"', "zoom = 1.5", "opacity = 0.6", "step = 0.25", "background = [0.1, 0.2, 0.3]",
+        "strip_height = 9", "labels = false"]
+    assert ndtrace.load_toml(scene.to_toml()) == scene
+    retina = ndtrace.trace(ndtrace.load_dict({**scene.to_dict(), "camera": {**scene.to_dict()["camera"], "resolution": 8}}))
+    a = ndtrace.composite(retina, **{**options, "size": (32, 24)})
+    b = ndtrace.composite(retina, zoom=1.5, opacity=0.6, step=0.25, background=(0.1, 0.2, 0.3), size=(32, 24))
+    np.testing.assert_array_equal(a, b)

@@ -246,6 +246,24 @@ def test_cli_errors_are_one_line_with_exit_status_2(tmp_path):
     assert p.returncode == 2 and "Traceback" in p.stderr
 
 
+def test_cli_composite_flags_are_checked_by_the_core_under_their_names(tmp_path):
+    out = tmp_path / "x.png"
+    p = cli("scenes/cube.toml", "-o", str(out), "--size", "0x48")
+    assert p.returncode == 2
+    assert p.stderr.strip() == ("ndtrace: error: --size: composite.size: width and height must be "
+                                "positive, got (0, 48)"), p.stderr
+    p = cli("scenes/tesseract.toml", "-o", str(out), "--view", "nan,10")
+    assert p.returncode == 2
+    assert p.stderr.strip() == "ndtrace: error: --view: composite.azimuth: must be finite, got NaN", p.stderr
+    # The choices are the core's names.
+    p = cli("scenes/tesseract.toml", "-o", str(out), "--composite", "mpi")
+    assert p.returncode == 2 and all(f"'{m}'" in p.stderr for m in ndtrace._ndtrace.COMPOSITE_MODES), p.stderr
+    p = cli("scenes/tesseract.toml", "-o", str(out), "--mode", "shade")
+    assert p.returncode == 2 and all(f"'{m}'" in p.stderr for m in ndtrace._ndtrace.RENDER_MODES), p.stderr
+    assert ndtrace._ndtrace.RENDER_MODES == ("shaded", "depth", "normal", "primitive_id", "barycentric")
+    assert not out.exists()
+
+
 def test_cli_version_and_help():
     p = cli("--version")
     assert p.returncode == 0 and p.stdout.strip() == f"ndtrace {ndtrace.__version__}"

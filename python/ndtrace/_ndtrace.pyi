@@ -104,6 +104,8 @@ def orient_flips(
     vertices: npt.NDArray[np.float64], simplices: npt.NDArray[np.uint32]
 ) -> npt.NDArray[np.bool_]: ...
 
+RENDER_MODES: tuple[str, ...]
+
 # -- files ----------------------------------------------------------------------------
 
 def write_retina_exr(
@@ -125,24 +127,14 @@ def read_exr(path: str) -> dict[str, object]: ...
 
 # -- compositing ----------------------------------------------------------------------
 
+COMPOSITE_MODES: tuple[str, ...]
+PROJECTIONS: tuple[str, ...]
+
 def composite(
     rgba: npt.NDArray[np.float32],
     depth: npt.NDArray[np.float32] | None = None,
-    *,
-    mode: str = "volume",
-    azimuth: float = 30.0,
-    elevation: float = 20.0,
-    distance: float = ...,
-    zoom: float = 1.0,
-    projection: str = "perspective",
-    size: tuple[int, int] = (512, 512),
-    opacity: float = 1.0,
-    step: float = 0.5,
-    depth_cue: float = 0.0,
-    axis: int = 0,
-    background: tuple[float, float, float] = (0.0, 0.0, 0.0),
-    stages: list[tuple[float, float]] | None = None,
-    strip_height: int = 32,
-    labels: bool = True,
+    options: dict[str, object] | None = None,
     threads: int | None = None,
 ) -> npt.NDArray[np.float32]: ...
+def composite_defaults() -> dict[str, object]: ...
+def check_composite(options: dict[str, object], name: str) -> None: ...

@@ -26,13 +26,13 @@ import traceback
 
 import numpy as np
 
-from . import __version__
+from . import __version__, _ndtrace
 from .files import IMAGE_FORMATS, write_exr, write_image
 from .retina import trace
 from .scene import Scene, load_dict, load_file
 
-MODES = ("shaded", "depth", "normal", "primitive_id", "barycentric")
-COMPOSITES = ("volume", "mip", "first_hit", "slices")
+MODES: tuple[str, ...] = tuple(_ndtrace.RENDER_MODES)  # render.mode, as the core names them
+COMPOSITES: tuple[str, ...] = tuple(_ndtrace.COMPOSITE_MODES)  # composite.mode
 
 
 class UsageError(Exception):
@@ -194,14 +194,38 @@ def _write_picture(path: str, picture, transparent: bool) -> None:
         write_image(path, picture, transparent=transparent)
 
 
-def _ints(text: str, option: str, sep: str = ",") -> list[int]:
+def _ints(text: str, option: str, sep: str = ",", positive: bool = True) -> list[int]:
     try:
         values = [int(v) for v in text.split(sep)]
     except ValueError:
         raise UsageError(f"{option}: expected integers separated by '{sep}', got {text!r}") from None
-    if any(v <= 0 for v in values):
+    if positive and any(v <= 0 for v in values):
         raise UsageError(f"{option}: values must be positive, got {text!r}")
     return values
+
+
+def _composite_flags(args: argparse.Namespace) -> dict:
+    """The ``[composite]`` keys the flags set. The core checks each flag's keys as it checks a
+    scene's table, so an error names the flag and the key: ``--size: composite.size: …``."""
+    flags: list[tuple[str, dict]] = []
+    if args.composite:
+        flags.append(("--composite", {"mode": args.composite}))
+    if args.view:
+        try:
+            az, el = (float(v) for v in args.view.split(","))
+        except ValueError:
+            raise UsageError(f"--view: expected AZIMUTH,ELEVATION in degrees, got {args.view!r}") from None
+        flags.append(("--view", {"azimuth": az, "elevation": el}))
+    if args.size:
+        size = _ints(args.size.lower(), "--size", "x", positive=False)
+        if len(size) != 2:
+            raise UsageError(f"--size: expected WxH, got {args.size!r}")
+        flags.append(("--size", {"size": size}))
+    keys: dict = {}
+    for flag, values in flags:
+        _ndtrace.check_composite(values, flag)
+        keys.update(values)
+    return keys
 
 
 def _load(path: str) -> Scene:
@@ -262,19 +286,7 @@ def run(argv: list[str] | None = None) -> int:
         render["seed"] = args.seed
     if args.mode:
         render["mode"] = args.mode
-    comp = dict(data.get("composite") or {})
-    if args.composite:
-        comp["mode"] = args.composite
-    if args.view:
-        try:
-            az, el = (float(v) for v in args.view.split(","))
-        except ValueError:
-            raise UsageError(f"--view: expected AZIMUTH,ELEVATION in degrees, got {args.view!r}") from None
-        comp["azimuth"], comp["elevation"] = az, el
-    if args.size:
-        comp["size"] = _ints(args.size.lower(), "--size", "x")
-        if len(comp["size"]) != 2:
-            raise UsageError(f"--size: expected WxH, got {args.size!r}")
+    comp = {**(data.get("composite") or {}), **_composite_flags(args)}
     if comp:
         data["composite"] = comp
     scene = load_dict(data, base=scene._base or os.path.dirname(os.path.abspath(args.scene)))

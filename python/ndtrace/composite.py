@@ -1,8 +1,12 @@
-"""Compositing a retina into a 2D picture: ``ndtrace.composite``."""
+"""Compositing a retina into a 2D picture: ``ndtrace.composite``.
+
+The options are the core's (``CompositeOptions`` in ``crates/ndtrace/src/composite/options.rs``):
+the keywords of :func:`composite` are the keys of a scene's ``[composite]`` table, and their
+defaults and allowed ranges are declared and checked once, there.
+"""
 
 from __future__ import annotations
 
-import math
 import numbers
 from typing import Sequence
 
@@ -10,36 +14,15 @@ import numpy as np
 
 from . import _ndtrace
 from .retina import Retina
+from .scene import _plain
 
 __all__ = ["composite", "scene_options", "MODES", "PROJECTIONS"]
 
-MODES = ("volume", "mip", "first_hit", "slices")
-PROJECTIONS = ("perspective", "orthographic")
+MODES: tuple[str, ...] = tuple(_ndtrace.COMPOSITE_MODES)
+PROJECTIONS: tuple[str, ...] = tuple(_ndtrace.PROJECTIONS)
 
 
-def _real(name: str, value, *, low: float | None = None, low_open: bool = False,
-          high: float | None = None) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise ValueError(f"{name}: expected a real number, got {value!r}")
-    v = float(value)
-    if not math.isfinite(v):
-        raise ValueError(f"{name}: must be finite, got {v}")
-    if low is not None and (v <= low if low_open else v < low):
-        raise ValueError(f"{name}: must be {'>' if low_open else '≥'} {low}, got {v}")
-    if high is not None and v > high:
-        raise ValueError(f"{name}: must be ≤ {high}, got {v}")
-    return v
-
-
-def _int(name: str, value, *, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise ValueError(f"{name}: expected an integer, got {value!r}")
-    if int(value) < low:
-        raise ValueError(f"{name}: must be at least {low}, got {value}")
-    return int(value)
-
-
-def _array(name: str, value, ndim: int | None = None) -> np.ndarray:
+def _array(name: str, value) -> np.ndarray:
     a = np.asarray(value)
     if a.dtype == object or not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)
                                  or a.dtype == np.bool_):
@@ -143,62 +126,21 @@ def composite(
         raise ValueError(f"retina: a retina has 1 to 7 axes (N = 2..8), got shape {rgba.shape}")
     if depth is not None and depth.shape != rgba.shape[:-1]:
         raise ValueError(f"retina.depth: expected shape {rgba.shape[:-1]}, got {depth.shape}")
-    if mode not in MODES:
-        raise ValueError(f"mode: expected one of {', '.join(map(repr, MODES))}, got {mode!r}")
-    if projection not in PROJECTIONS:
-        raise ValueError(f"projection: expected 'perspective' or 'orthographic', got {projection!r}")
-    azimuth = _real("azimuth", azimuth)
-    elevation = _real("elevation", elevation)
-    if projection == "perspective":
-        distance = _real("distance", distance, low=1.0, low_open=True)
-    else:
-        distance = _real("distance", distance, low=0.0, low_open=True)
-    opacity = _real("opacity", opacity, low=0.0)
-    depth_cue = _real("depth_cue", depth_cue, low=0.0, high=1.0)
-    if depth_cue > 0 and depth is None:
-        raise ValueError("depth_cue: needs depth, i.e. an ndtrace.Retina (a raw rgba array has none)")
-    zoom = _real("zoom", zoom, low=0.0, low_open=True)
-    step = _real("step", step, low=0.01, high=4.0)
-    axis = _int("axis", axis, low=0)
-    if mode == "slices" and rgba.ndim - 1 >= 3 and axis > 2:
-        raise ValueError(f"axis: must be 0, 1 or 2 (an axis of the 3D volume), got {axis}")
-    strip_height = _int("strip_height", strip_height, low=1)
-    shape = rgba.shape[:-1]
-    if size is None:
-        if len(shape) == 2:
-            size = (shape[1], shape[0])
-        elif len(shape) == 1:
-            size = (shape[0], strip_height)
-        else:
-            size = (512, 512)
-    try:
-        w, h = size
-    except (TypeError, ValueError):
-        raise ValueError(f"size: expected (width, height), got {size!r}") from None
-    size = (_int("size[0] (width)", w, low=1), _int("size[1] (height)", h, low=1))
-    if background is None:
-        bg = (0.0, 0.0, 0.0)
-    else:
-        b = np.asarray(background)
-        if b.shape != (3,):
-            raise ValueError(f"background: expected 3 numbers (linear RGB), got shape {b.shape}")
-        bg = tuple(_real(f"background[{k}]", v.item()) for k, v in enumerate(b))
-    if stages is not None:
-        st = np.asarray(stages, dtype=float) if len(stages) else np.zeros((0, 2))
-        if st.ndim != 2 or st.shape[1] != 2:
-            raise ValueError(f"stages: expected a sequence of (f, d) pairs, got shape {st.shape}")
-        if not np.all(np.isfinite(st)):
-            raise ValueError("stages: values must be finite")
-        stages = [(float(f), float(d)) for f, d in st]
     if threads is not None:
-        threads = _int("threads", threads, low=1)
-    out = _ndtrace.composite(
-        rgba, depth, mode=mode, azimuth=azimuth, elevation=elevation, distance=distance,
-        zoom=zoom, projection=projection, size=size, opacity=opacity, step=step,
-        depth_cue=depth_cue, axis=axis, background=bg, stages=stages,
-        strip_height=strip_height, labels=bool(labels), threads=threads,
-    )
-    return out
+        if isinstance(threads, bool) or not isinstance(threads, numbers.Integral) or threads < 1:
+            raise ValueError(f"threads: expected a positive integer or None, got {threads!r}")
+        threads = int(threads)
+    shape = rgba.shape[:-1]
+    if size is None:  # the native size of a 2D or 1D retina
+        size = (shape[1], shape[0]) if len(shape) == 2 else (shape[0], strip_height) if len(shape) == 1 else (512, 512)
+    options = dict(mode=mode, azimuth=azimuth, elevation=elevation, distance=distance, zoom=zoom,
+                   projection=projection, size=size, opacity=opacity, step=step, depth_cue=depth_cue,
+                   axis=axis, strip_height=strip_height, labels=labels)
+    if background is not None:
+        options["background"] = background
+    if stages is not None:
+        options["stages"] = stages
+    return _ndtrace.composite(rgba, depth, _plain(options), threads)
 
 
 def scene_options(description: dict) -> dict:

@@ -1,56 +1,50 @@
-//! `_ndtrace.composite`: a retina (C-contiguous float32 rgba `(..., 4)` and optional depth) in,
-//! a float32 picture `(H, W, 4)` out. The options are checked by the core
-//! (`ndtrace::composite`); the Python wrapper `ndtrace.composite` documents them.
+//! `_ndtrace.composite`: a retina (C-contiguous float32 rgba `(..., 4)` and optional depth) and
+//! a dict of options in, a float32 picture `(H, W, 4)` out. The dict is deserialized into the
+//! core's `CompositeOptions` — the same struct as a scene's `[composite]` table — so its keys,
+//! defaults and range checks are the core's; the Python wrapper `ndtrace.composite` documents
+//! them.
 
 use crate::errors::to_py_err;
 use ndtrace::composite::{self as core, CompositeMode, CompositeOptions, Projection};
+use ndtrace::scene::{self, PathError};
+use ndtrace::{names, NdError};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyTuple;
 
 type Arr<'py> = PyReadonlyArrayDyn<'py, f32>;
 
-fn parse_projection(name: &str) -> PyResult<Projection> {
-    match name {
-        "perspective" => Ok(Projection::Perspective),
-        "orthographic" => Ok(Projection::Orthographic),
-        other => Err(PyValueError::new_err(format!(
-            "projection: expected 'perspective' or 'orthographic', got {other:?}"
-        ))),
-    }
+/// The options a dict gives (keys missing from it keep their defaults).
+fn options_from(dict: &Bound<'_, PyAny>) -> Result<CompositeOptions, PathError> {
+    scene::deserialize(&mut pythonize::Depythonizer::from_object(dict))
 }
 
-/// Composites a retina into a picture; `threads=None` uses every core (the picture is the
-/// same whatever the number).
+/// Composites a retina into a picture with the options of the dict `options` (None: every
+/// default); `threads=None` uses every core (the picture is the same whatever the number).
 #[pyfunction]
-#[pyo3(signature = (
-    rgba, depth=None, *, mode="volume", azimuth=30.0, elevation=20.0,
-    distance=core::DEFAULT_DISTANCE, zoom=1.0, projection="perspective", size=(512, 512),
-    opacity=1.0, step=0.5, depth_cue=0.0, axis=0, background=(0.0, 0.0, 0.0), stages=None,
-    strip_height=32, labels=true, threads=None
-))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (rgba, depth=None, options=None, threads=None))]
 fn composite<'py>(
     py: Python<'py>,
     rgba: Arr<'py>,
     depth: Option<Arr<'py>>,
-    mode: &str,
-    azimuth: f64,
-    elevation: f64,
-    distance: f64,
-    zoom: f64,
-    projection: &str,
-    size: (usize, usize),
-    opacity: f64,
-    step: f64,
-    depth_cue: f64,
-    axis: usize,
-    background: (f64, f64, f64),
-    stages: Option<Vec<(f64, f64)>>,
-    strip_height: usize,
-    labels: bool,
+    options: Option<&Bound<'py, PyAny>>,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let opts = match options {
+        None => CompositeOptions::default(),
+        Some(dict) => options_from(dict).map_err(|e| {
+            let arg = if e.path.is_empty() {
+                "options".to_string()
+            } else {
+                e.path
+            };
+            to_py_err(NdError::Value {
+                arg,
+                message: e.message,
+            })
+        })?,
+    };
     let dims = rgba.shape().to_vec();
     if dims.len() < 2 || dims[dims.len() - 1] != 4 {
         return Err(PyValueError::new_err(format!(
@@ -75,23 +69,6 @@ fn composite<'py>(
         }
         None => None,
     };
-    let opts = CompositeOptions {
-        mode: CompositeMode::parse(mode).map_err(to_py_err)?,
-        azimuth,
-        elevation,
-        distance,
-        zoom,
-        projection: parse_projection(projection)?,
-        size,
-        opacity,
-        step,
-        depth_cue,
-        axis,
-        background: [background.0, background.1, background.2],
-        stages: stages.unwrap_or_default(),
-        strip_height,
-        labels,
-    };
     let pool = crate::thread_pool(threads)?;
     let run = || core::composite(rgba, depth, &shape, &opts);
     let image = py
@@ -105,8 +82,46 @@ fn composite<'py>(
         .into_any())
 }
 
-/// Adds `composite`.
+/// Every composite option with its default, as a dict in the order of the fields.
+#[pyfunction]
+fn composite_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    pythonize::pythonize(py, &CompositeOptions::default().with_every_key())
+        .map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// Checks the composite options of a dict on their own, without a retina (what a scene's
+/// `[composite]` table is checked for); errors read `name: composite.key: message`.
+#[pyfunction]
+fn check_composite(options: &Bound<'_, PyAny>, name: &str) -> PyResult<()> {
+    let located = |path: &str, message: String| {
+        to_py_err(NdError::Scene {
+            location: name.to_string(),
+            path: if path.is_empty() {
+                "composite".to_string()
+            } else {
+                format!("composite.{path}")
+            },
+            message,
+        })
+    };
+    let opts = options_from(options).map_err(|e| located(&e.path, e.message))?;
+    opts.validate().map_err(|e| located(&e.key, e.message))
+}
+
+/// Adds `composite`, `composite_defaults`, `check_composite` and the names of the composite
+/// modes and projections (`COMPOSITE_MODES`, `PROJECTIONS`).
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
     m.add_function(wrap_pyfunction!(composite, m)?)?;
+    m.add_function(wrap_pyfunction!(composite_defaults, m)?)?;
+    m.add_function(wrap_pyfunction!(check_composite, m)?)?;
+    m.add(
+        "COMPOSITE_MODES",
+        PyTuple::new(py, names::variants::<CompositeMode>())?,
+    )?;
+    m.add(
+        "PROJECTIONS",
+        PyTuple::new(py, names::variants::<Projection>())?,
+    )?;
     Ok(())
 }

@@ -5,6 +5,7 @@ use crate::errors::to_py_err;
 use crate::mesh::PyMeshReader;
 use ndtrace::pool;
 use ndtrace::render::{self, Progress, Retina};
+use ndtrace::scene::desc::RenderMode;
 use ndtrace::scene::{self, AnyScene, MeshReader, SceneDesc};
 use ndtrace::{with_scene, NdError};
 use numpy::ndarray::{ArrayViewMutD, IxDyn};
@@ -314,9 +315,13 @@ fn load_dict(
     Ok(CompiledScene { desc, scene })
 }
 
-/// Adds the scene functions and class.
+/// Adds the scene functions and class, and the names of the render modes (`RENDER_MODES`).
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<CompiledScene>()?;
+    m.add(
+        "RENDER_MODES",
+        pyo3::types::PyTuple::new(m.py(), ndtrace::names::variants::<RenderMode>())?,
+    )?;
     m.add_function(wrap_pyfunction!(release_buffers, m)?)?;
     m.add_function(wrap_pyfunction!(load_file, m)?)?;
     m.add_function(wrap_pyfunction!(load_toml, m)?)?;

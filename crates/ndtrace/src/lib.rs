@@ -33,6 +33,7 @@ pub mod files;
 pub mod geometry;
 pub mod linalg;
 pub mod mesh;
+pub mod names;
 pub mod pool;
 pub mod ray;
 pub mod render;

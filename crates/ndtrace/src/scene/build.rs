@@ -830,6 +830,10 @@ pub fn build_with<const N: usize>(
     if let Some(a) = &desc.animation {
         super::animation::check::<N>(a, desc.objects.len())?;
     }
+    if let Some(c) = &desc.composite {
+        c.validate_for(&camera.numpy_shape(), true)
+            .map_err(|e| PathError::new(format!("composite.{}", e.key), e.message))?;
+    }
     // 2. Meshes in world space. A transform that reverses handedness (det < 0) would turn
     //    outward normals inward (normals are pseudotensors), so such simplices are reordered to
     //    keep their orientation.

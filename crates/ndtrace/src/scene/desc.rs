@@ -52,58 +52,11 @@ pub struct SceneDesc {
     pub render: RenderDesc,
     /// How the CLI turns the retina into a picture (keyword arguments of `ndtrace.composite`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub composite: Option<CompositeDesc>,
+    pub composite: Option<crate::composite::CompositeOptions>,
     /// A sequence of frames in which the objects or the camera rotate (`ndtrace.animate`,
     /// `ndtrace --frames`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub animation: Option<AnimationDesc>,
-}
-
-/// Compositing mode of a retina.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum CompositeModeDesc {
-    /// Front-to-back emission–absorption.
-    Volume,
-    /// Maximum intensity projection.
-    Mip,
-    /// The nearest occupied cell, opaque.
-    FirstHit,
-    /// A montage of slices.
-    Slices,
-}
-
-/// `[composite]`: defaults for turning the retina into a picture; every key optional.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-#[serde(deny_unknown_fields)]
-pub struct CompositeDesc {
-    /// Compositing mode.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mode: Option<CompositeModeDesc>,
-    /// Orbit angle of the 3D compositing camera, degrees.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub azimuth: Option<f64>,
-    /// Elevation of the 3D compositing camera, degrees.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub elevation: Option<f64>,
-    /// Distance of the 3D compositing camera.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub distance: Option<f64>,
-    /// Projection of the 3D compositing camera.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub projection: Option<Projection>,
-    /// Picture size [W, H].
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub size: Option<[u32; 2]>,
-    /// Scale of each cell's opacity.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub opacity: Option<f64>,
-    /// Strength of depth cueing along the hidden axis.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub depth_cue: Option<f64>,
-    /// Axis of the slices montage.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub axis: Option<u32>,
 }
 
 /// `[animation]`: frames in which a rotation — one of `sweep`, `slerp` or `rolling` — moves the

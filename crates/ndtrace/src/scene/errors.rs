@@ -51,8 +51,20 @@ pub fn friendly_message(message: &str, path: &str) -> String {
             out
         }
         // pythonize's message for a negative or too large Python int in an unsigned field.
-        _ if message.contains("out of range integral type conversion") => {
+        _ if message.contains("out of range integral type conversion")
+            || message.contains("can't convert negative int to unsigned") =>
+        {
             "integer out of range: expected a non-negative integer of sensible size".to_string()
+        }
+        // pyo3's conversion errors passed on by pythonize: "TypeError: 'float' object cannot be
+        // interpreted as an integer", "TypeError: must be real number, not str".
+        _ if message.contains("object cannot be interpreted as an integer") => {
+            let got = message.split('\'').nth(1).unwrap_or("something else");
+            format!("expected an integer, got {got}")
+        }
+        _ if message.contains("must be real number, not ") => {
+            let got = message.rsplit("not ").next().unwrap_or("something else");
+            format!("expected a number, got {got}")
         }
         _ => message.to_string(),
     }
@@ -169,6 +181,18 @@ mod tests {
             "unknown key \"zzzzzz\" (expected one of \"color\", \"smooth\")"
         );
         assert_eq!(friendly_message("invalid type", "x"), "invalid type");
+        let m = friendly_message("OverflowError: can't convert negative int to unsigned", "x");
+        assert_eq!(
+            m,
+            "integer out of range: expected a non-negative integer of sensible size"
+        );
+        let m = friendly_message(
+            "TypeError: 'float' object cannot be interpreted as an integer",
+            "x",
+        );
+        assert_eq!(m, "expected an integer, got float");
+        let m = friendly_message("TypeError: must be real number, not str", "x");
+        assert_eq!(m, "expected a number, got str");
     }
 
     #[test]

@@ -102,9 +102,11 @@ fn locate(
     }
 }
 
-/// Deserializes a description, turning serde errors into [`PathError`]s with field paths.
-pub fn deserialize<'de, D>(de: D) -> Result<SceneDesc, PathError>
+/// Deserializes a description (or a part of one, such as the composite options), turning
+/// serde errors into [`PathError`]s with field paths.
+pub fn deserialize<'de, T, D>(de: D) -> Result<T, PathError>
 where
+    T: serde::Deserialize<'de>,
     D: serde::Deserializer<'de>,
     D::Error: std::fmt::Display,
 {

@@ -1,0 +1,316 @@
+//! Compositing a retina into a 2D picture (course notes, Part II(B): "Projection: film ≈
+//! volumetric retina of 4D cyclops. Volume render: splat, Shirley–Tuchman, texture panels", and
+//! "ND perspective … repeat recursively down to 2D image: a hierarchy of parameter sets
+//! (f_N, d_N), …, (f_3, d_3)").
+//!
+//! The input is a traced retina: premultiplied linear RGBA per cell (`rgba`, 4 floats per cell)
+//! and optionally the distance from the N-D eye (`depth`, inf on a miss), both C-ordered in numpy
+//! order `[i_{N−1}, …, i_1]` with `shape = [R_{N−1}, …, R_1]` (so N = `shape.len()` + 1).
+//!
+//! # What each dimension becomes
+//!
+//! * **N = 4** (a 3D retina `(slices, rows, columns)`): a 3D camera orbits the retina cube; see
+//!   [`CompositeMode`] for the four renderings. The cube is placed with its centre at the origin,
+//!   world x along the columns (i_1 → +x), world y up the rows (row 0 on top, as in an image)
+//!   and world z along the slices (i_3 → +z); cells are cubes of side `2 / max(R)`, so the
+//!   longest side of the cube spans [−1, 1]. At `azimuth = elevation = 0` the camera looks
+//!   along +z (slice 0 nearest) with x to the right and y up, so a face-on orthographic picture
+//!   of a retina constant across slices is exactly one slice image (rows down, columns right).
+//!   Positive azimuth swings the eye toward +x (the picture's right), positive elevation toward
+//!   +y (the top): the eye sits at `distance · r · (sin az cos el, sin el, −cos az cos el)`,
+//!   where r is the half-diagonal of the cube.
+//! * **N ≥ 5**: recursive projection. The (N−1)-D retina is composited one axis at a time,
+//!   each stage a k-D → (k−1)-D emission–absorption projection along the leading numpy axis,
+//!   down to a 3D volume that is then rendered as for N = 4 (see [`CompositeOptions::stages`]).
+//! * **N = 3** (a 2D retina `(rows, columns)`): the retina is the image. It is scaled to fit
+//!   `size` (aspect ratio kept, centred, nearest-cell sampling, by a whole factor when it is
+//!   enlarged) over the background; passing `size = (R_1, R_2)` returns it at native size.
+//! * **N = 2** (a 1D retina): a strip of `strip_height` rows spanning the width `size.0`,
+//!   centred vertically in the picture.
+//!
+//! # The result
+//!
+//! An [`Image`]: linear float32 RGBA, row-major `(H, W, 4)`, row 0 at the top. **The RGB
+//! channels are the retina composited over the opaque background colour** (what one sees:
+//! `C + (1 − A) · background`, with C the accumulated premultiplied colour); **the alpha
+//! channel is the accumulated opacity A of the retina's content alone** (1 − transmittance;
+//! separators and labels of the slice montage count as opaque). With the default black
+//! background the RGB channels are exactly C, so `(RGB, A)` is then a valid premultiplied
+//! image that can be composited over anything else.
+//!
+//! Work is split over output rows with rayon; every pixel depends only on the inputs and its
+//! own coordinates, so the picture is bit-identical whatever the number of threads.
+
+mod montage;
+mod options;
+mod stages;
+mod volume;
+
+pub use montage::{slice_layout, Layout, SEPARATOR};
+pub use options::{
+    CompositeMode, CompositeOptions, GivenKeys, OptionError, Projection, DEFAULT_DISTANCE,
+    DEFAULT_STAGE_DISTANCE, MAX_PIXELS,
+};
+
+use crate::{NdError, NdResult};
+use glam::Vec4;
+use montage::{render_slices, render_strip, render_tiles, Tiles};
+use rayon::prelude::*;
+use stages::{project_stage, stage_params};
+use volume::{render_3d, Grid};
+
+/// Rays of the volume mode stop when the transmittance falls below this.
+pub const MIN_TRANSMITTANCE: f32 = 1e-4;
+/// Depth-cue tint of the nearest cells (warm).
+pub const NEAR_TINT: [f32; 3] = [1.2, 0.9, 0.6];
+/// Depth-cue tint of the farthest cells (cool).
+pub const FAR_TINT: [f32; 3] = [0.5, 0.75, 1.2];
+
+/// A composited picture: linear float32 RGBA `(H, W, 4)`, row 0 at the top; RGB over the
+/// opaque background, alpha the content's opacity (see the [module docs](self)).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Image {
+    /// W.
+    pub width: usize,
+    /// H.
+    pub height: usize,
+    /// `width · height · 4` floats.
+    pub rgba: Vec<f32>,
+}
+
+impl Image {
+    /// The RGBA of pixel (x, y).
+    pub fn pixel(&self, x: usize, y: usize) -> [f32; 4] {
+        let i = (y * self.width + x) * 4;
+        [
+            self.rgba[i],
+            self.rgba[i + 1],
+            self.rgba[i + 2],
+            self.rgba[i + 3],
+        ]
+    }
+}
+
+/// Composites a retina (premultiplied `rgba`, optional `depth`, numpy-order `shape`) into a
+/// picture. See the [module docs](self) and [`CompositeOptions`].
+pub fn composite(
+    rgba: &[f32],
+    depth: Option<&[f32]>,
+    shape: &[usize],
+    opts: &CompositeOptions,
+) -> NdResult<Image> {
+    let cells = check_retina(rgba, depth, shape)?;
+    opts.validate_for(shape, depth.is_some())?;
+    let mut vol = Volume {
+        shape: shape.to_vec(),
+        cells: prepare(rgba, depth, cells, opts),
+    };
+    // Recursive projection, one leading axis at a time, down to 3D.
+    let mut stage = 0;
+    while vol.shape.len() > 3 {
+        let (f, d) = stage_params(&vol.shape, opts.stages.get(stage).copied());
+        vol = project_stage(&vol, f, d, opts.projection == Projection::Orthographic);
+        stage += 1;
+    }
+    let (w, h) = opts.size;
+    let bg = opts.background.map(|x| x as f32);
+    let rgba = match vol.shape.len() {
+        3 => match opts.mode {
+            CompositeMode::Slices => render_slices(&vol, opts, bg),
+            mode => render_3d(&Grid::new(&vol), mode, opts, bg),
+        },
+        2 => {
+            let (rows, cols) = (vol.shape[0], vol.shape[1]);
+            let tiles = Tiles {
+                cells: &vol.cells,
+                tw: cols,
+                th: rows,
+                count: 1,
+                gap: 0,
+                labels: false,
+            };
+            render_tiles(w, h, &tiles, bg, |_, x, y| y * cols + x)
+        }
+        _ => render_strip(&vol.cells, w, h, opts.strip_height, bg),
+    };
+    Ok(Image {
+        width: w,
+        height: h,
+        rgba,
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// The input, its preparation and front-to-back accumulation
+// ---------------------------------------------------------------------------------------------
+
+fn shape_err(message: String) -> NdError {
+    NdError::Value {
+        arg: "shape".into(),
+        message,
+    }
+}
+
+/// Checks the retina's shape and the lengths of its arrays; returns the number of cells.
+fn check_retina(rgba: &[f32], depth: Option<&[f32]>, shape: &[usize]) -> NdResult<usize> {
+    let m = shape.len();
+    if !(1..=7).contains(&m) {
+        return Err(shape_err(format!(
+            "a retina has 1 to 7 axes (scene dimension N = 2..=8), got {m} axes {shape:?}"
+        )));
+    }
+    if let Some(k) = shape.iter().position(|&r| r == 0) {
+        return Err(shape_err(format!("axis {k} has no cells: {shape:?}")));
+    }
+    let cells = shape
+        .iter()
+        .try_fold(1usize, |a, &r| a.checked_mul(r))
+        .filter(|&c| c <= isize::MAX as usize / 16)
+        .ok_or_else(|| shape_err(format!("too many cells: {shape:?}")))?;
+    let dims = shape
+        .iter()
+        .map(|r| r.to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    if rgba.len() != cells * 4 {
+        return Err(NdError::Shape {
+            arg: "rgba".into(),
+            expected: format!("({dims}, 4) = {} floats", cells * 4),
+            got: format!("{} floats", rgba.len()),
+        });
+    }
+    if let Some(d) = depth {
+        if d.len() != cells {
+            return Err(NdError::Shape {
+                arg: "depth".into(),
+                expected: format!("({dims}) = {cells} floats"),
+                got: format!("{} floats", d.len()),
+            });
+        }
+    }
+    Ok(cells)
+}
+
+/// A working copy of the retina as one `[f32; 4]` per cell: alpha scaled by the opacity
+/// (colour with it) and clamped to [0, 1], and the depth cue applied.
+pub(super) fn prepare(
+    rgba: &[f32],
+    depth: Option<&[f32]>,
+    cells: usize,
+    o: &CompositeOptions,
+) -> Vec<[f32; 4]> {
+    let opacity = o.opacity as f32;
+    let cue = o.depth_cue as f32;
+    let (lo, hi) = match (depth, cue > 0.0) {
+        (Some(d), true) => d
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            }),
+        _ => (0.0, 0.0),
+    };
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    let mut out = vec![[0f32; 4]; cells];
+    out.par_chunks_mut(4096)
+        .enumerate()
+        .for_each(|(chunk, dst)| {
+            for (j, cell) in dst.iter_mut().enumerate() {
+                let i = chunk * 4096 + j;
+                let a = rgba[i * 4 + 3];
+                let a2 = (a * opacity).clamp(0.0, 1.0);
+                let k = if a > 0.0 { a2 / a } else { 0.0 };
+                let mut c = [
+                    rgba[i * 4] * k,
+                    rgba[i * 4 + 1] * k,
+                    rgba[i * 4 + 2] * k,
+                    a2,
+                ];
+                if cue > 0.0 {
+                    if let Some(d) = depth.map(|d| d[i]).filter(|d| d.is_finite()) {
+                        let t = ((d - lo) / span).clamp(0.0, 1.0);
+                        for ch in 0..3 {
+                            let tint = NEAR_TINT[ch] + (FAR_TINT[ch] - NEAR_TINT[ch]) * t;
+                            c[ch] *= 1.0 - cue + cue * tint;
+                        }
+                    }
+                }
+                *cell = c;
+            }
+        });
+    out
+}
+
+/// An m-D array of premultiplied RGBA cells in numpy order.
+pub(super) struct Volume {
+    pub(super) shape: Vec<usize>,
+    pub(super) cells: Vec<[f32; 4]>,
+}
+
+/// Front-to-back "over" accumulation with the step correction of [`CompositeMode::Volume`].
+#[derive(Clone, Copy)]
+pub(super) struct Accum {
+    /// Premultiplied colour in x, y, z (w unused).
+    color: Vec4,
+    trans: f32,
+}
+
+impl Accum {
+    pub(super) const EMPTY: Accum = Accum {
+        color: Vec4::ZERO,
+        trans: 1.0,
+    };
+
+    /// Adds a sample of premultiplied `s` over a path of `dt` cells.
+    #[inline(always)]
+    pub(super) fn add(&mut self, s: Vec4, dt: f32) {
+        let a = s.w;
+        if !(a > 0.0) {
+            return;
+        }
+        let (alpha, k) = if a >= 1.0 {
+            (1.0, 1.0)
+        } else {
+            let alpha = opacity_over(a, dt);
+            (alpha, if a > 1e-6 { alpha / a } else { dt })
+        };
+        self.color += s * (self.trans * k);
+        self.trans *= 1.0 - alpha;
+    }
+
+    pub(super) fn done(&self) -> bool {
+        self.trans < MIN_TRANSMITTANCE
+    }
+
+    pub(super) fn rgba(&self) -> [f32; 4] {
+        [self.color.x, self.color.y, self.color.z, 1.0 - self.trans]
+    }
+}
+
+/// 1 − (1 − a)^dt, the opacity over `dt` cells of a cell of alpha a < 1; the common steps avoid
+/// `powf` (which dominated the volume mode).
+#[inline(always)]
+fn opacity_over(a: f32, dt: f32) -> f32 {
+    let u = 1.0 - a;
+    if dt == 1.0 {
+        a
+    } else if dt == 0.5 {
+        1.0 - u.sqrt()
+    } else if dt == 0.25 {
+        1.0 - u.sqrt().sqrt()
+    } else if dt == 2.0 {
+        1.0 - u * u
+    } else {
+        1.0 - u.powf(dt)
+    }
+}
+
+/// `s` (premultiplied) over the opaque background: RGB composited, alpha kept.
+#[inline]
+pub(super) fn over(s: [f32; 4], bg: [f32; 3]) -> [f32; 4] {
+    let t = 1.0 - s[3];
+    [s[0] + t * bg[0], s[1] + t * bg[1], s[2] + t * bg[2], s[3]]
+}
+
+#[cfg(test)]
+mod tests;

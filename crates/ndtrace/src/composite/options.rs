@@ -1,0 +1,714 @@
+//! The options of [`composite`](super::composite): one struct that is also a scene's
+//! `[composite]` table, the dict the Python bindings accept and what the command line's flags
+//! set. Each field is declared once below, with its type and default; every range check is in
+//! [`CompositeOptions::validate`] and [`CompositeOptions::validate_for`], so a bad value gets
+//! the same message whichever way it arrives (a TOML file locates it, `file:line:col:
+//! composite.opacity: must be ≥ 0, got -1`; a keyword argument names it, `opacity: must be ≥ 0,
+//! got -1`).
+//!
+//! These two are equivalent:
+//!
+//! ```toml
+//! [composite]
+//! mode = "slices"
+//! size = [800, 600]
+//! ```
+//!
+//! ```python
+//! ndtrace.composite(retina, mode="slices", size=(800, 600))
+//! ```
+
+use super::stages::half_lengths;
+use crate::scene::desc::Projection as SceneProjection;
+use crate::NdError;
+use serde::de::{self, DeserializeSeed, MapAccess, Visitor};
+use serde::ser::SerializeStruct;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::fmt;
+
+/// Perspective or orthographic projection (the scene description's enum, shared).
+pub type Projection = SceneProjection;
+
+/// How a 3D volume (the retina of a 4D scene, or the result of the recursive projection for
+/// N ≥ 5) is turned into a picture. Ignored for N ≤ 3. Named in snake case (`"first_hit"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CompositeMode {
+    /// Front-to-back emission–absorption along each pixel ray, sampling the premultiplied RGBA
+    /// trilinearly every [`CompositeOptions::step`] cells. A cell's alpha is its opacity over
+    /// one cell length: a sample with alpha a over a step of Δ cells has opacity 1 − (1 − a)^Δ
+    /// and emits its premultiplied colour times (1 − (1 − a)^Δ) / a, so the picture does not
+    /// depend on the step (a uniform slab of alpha a and thickness L cells has opacity exactly
+    /// 1 − (1 − a)^L). Rays stop once the transmittance falls below 1e-4.
+    #[default]
+    Volume,
+    /// Maximum intensity projection: each ray shows, unchanged, the cell it crosses whose
+    /// premultiplied colour has the largest Rec. 709 luminance (ties: the larger alpha, then
+    /// the nearer cell). Cells are crossed exactly (voxel traversal, no interpolation).
+    Mip,
+    /// The nearest cell with alpha > 0 that the ray crosses, shown opaque in its own
+    /// (un-premultiplied) colour: crisp cube-shaped cells and silhouettes.
+    FirstHit,
+    /// A montage of the 2D slices of the volume along [`CompositeOptions::axis`]; see
+    /// [`slice_layout`](super::slice_layout) for where slice k goes.
+    Slices,
+}
+
+/// Default camera distance, in half-diagonals of the retina cube.
+pub const DEFAULT_DISTANCE: f64 = 4.0;
+/// Default eye distance d_k of a recursive stage, in half-lengths of the stage's longest axis.
+pub const DEFAULT_STAGE_DISTANCE: f64 = 3.0;
+/// Largest number of pixels of a picture.
+pub const MAX_PIXELS: usize = 1 << 28;
+
+/// Declares [`CompositeOptions`] from one list of `field: Type = default` entries: the struct,
+/// its [`Default`], [`CompositeOptions::KEYS`] and its serde form (a table with one optional
+/// key per field, unknown keys refused, as `#[serde(default, deny_unknown_fields)]` would
+/// derive, but remembering which keys were given; see [`GivenKeys`]).
+macro_rules! composite_options {
+    (
+        $(#[$meta:meta])*
+        pub struct $Name:ident {
+            $( $(#[$field_meta:meta])* $field:ident : $ty:ty = $default:expr, )*
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, PartialEq)]
+        pub struct $Name {
+            $( $(#[$field_meta])* pub $field: $ty, )*
+            /// The keys of the table or dict these options were read from (none for options
+            /// built in code). Serializing writes these keys and every value that differs from
+            /// its default, so a scene's `[composite]` table is written back as it was given.
+            pub given: GivenKeys,
+        }
+
+        impl Default for $Name {
+            fn default() -> Self {
+                Self { $( $field: $default, )* given: GivenKeys::NONE }
+            }
+        }
+
+        impl $Name {
+            /// The keys of a `[composite]` table (the fields, in the order they are written).
+            pub const KEYS: &'static [&'static str] = &[$( stringify!($field) ),*];
+        }
+
+        impl Serialize for $Name {
+            fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+                let default = Self::default();
+                let written =
+                    [$( self.given.has(stringify!($field)) || self.$field != default.$field ),*];
+                let count = written.iter().filter(|&&w| w).count();
+                let mut table = serializer.serialize_struct(stringify!($Name), count)?;
+                let mut written = written.into_iter();
+                $(
+                    if written.next() == Some(true) {
+                        table.serialize_field(stringify!($field), &self.$field)?;
+                    } else {
+                        table.skip_field(stringify!($field))?;
+                    }
+                )*
+                table.end()
+            }
+        }
+
+        impl<'de> Deserialize<'de> for $Name {
+            fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+                struct Table;
+                impl<'de> Visitor<'de> for Table {
+                    type Value = $Name;
+                    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                        f.write_str("a table of composite options")
+                    }
+                    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<$Name, A::Error> {
+                        let mut options = $Name::default();
+                        while let Some(key) = map.next_key_seed(Key)? {
+                            if options.given.has(key) {
+                                return Err(de::Error::duplicate_field(key));
+                            }
+                            options.given.insert(key);
+                            match key {
+                                $( stringify!($field) => options.$field = map.next_value()?, )*
+                                other => return Err(de::Error::unknown_field(other, $Name::KEYS)),
+                            }
+                        }
+                        Ok(options)
+                    }
+                }
+                deserializer.deserialize_struct(stringify!($Name), $Name::KEYS, Table)
+            }
+        }
+    };
+}
+
+composite_options! {
+    /// Options of [`composite`](super::composite): a scene's `[composite]` table, the
+    /// `options` dict of the bindings, the keyword arguments of `ndtrace.composite`. Every
+    /// field has a documented default ([`Default`]); [`validate`](Self::validate) and
+    /// [`validate_for`](Self::validate_for) state their ranges.
+    pub struct CompositeOptions {
+        /// How a 3D volume becomes a picture. Default [`CompositeMode::Volume`].
+        mode: CompositeMode = CompositeMode::Volume,
+        /// Degrees; rotation of the eye about the vertical (row) axis. Default 30.
+        azimuth: f64 = 30.0,
+        /// Degrees; height of the eye above the horizontal plane. Default 20.
+        elevation: f64 = 20.0,
+        /// Distance from the cube's centre to the eye, in units of the cube's half-diagonal r
+        /// (the radius of its bounding sphere). Perspective: must exceed 1 (the eye outside the
+        /// bounding sphere); the field of view is the one in which the bounding sphere just
+        /// fills the shorter side of the picture (tan(fov/2) = 1/√(distance² − 1)), so the
+        /// object keeps its size as the camera orbits and a larger distance only weakens the
+        /// perspective. Orthographic: any positive value; the picture does not depend on it
+        /// (the view's shorter side spans the bounding sphere's diameter 2r). Default
+        /// [`DEFAULT_DISTANCE`] = 4.
+        distance: f64 = DEFAULT_DISTANCE,
+        /// Magnification of the 3D view (both projections): 2 shows half the width. Must be
+        /// positive. Default 1.
+        zoom: f64 = 1.0,
+        /// Of the 3D camera and of every recursive stage. Default perspective.
+        projection: Projection = Projection::Perspective,
+        /// Picture size (W, H) in pixels, each ≥ 1, at most [`MAX_PIXELS`] in all. Default
+        /// (512, 512).
+        size: (usize, usize) = (512, 512),
+        /// Scales every cell's alpha (and its premultiplied colour with it, clamped so
+        /// alpha ≤ 1) before anything else, so inner structure shows through: 0.05 makes a
+        /// solid traced body a translucent cloud. Must be ≥ 0. Default 1.
+        opacity: f64 = 1.0,
+        /// Sample spacing of the volume mode, in cells (0.01 ..= 4). Default 0.5.
+        step: f64 = 0.5,
+        /// Strength in [0, 1] of depth cueing; 0 turns it off (default). Every hit cell's
+        /// colour is multiplied by `1 − s + s · tint(t)` where t ∈ [0, 1] is its depth
+        /// (distance from the N-D eye, the `depth` array) normalized over the retina's finite
+        /// depths, and tint runs linearly from warm [`NEAR_TINT`](super::NEAR_TINT) (nearest)
+        /// to cool [`FAR_TINT`](super::FAR_TINT) (farthest), so near and far along the hidden
+        /// axis read apart. Needs `depth`.
+        depth_cue: f64 = 0.0,
+        /// For [`CompositeMode::Slices`]: the numpy axis of the 3D volume to slice along
+        /// (0 = slices, 1 = rows, 2 = columns). Default 0.
+        axis: usize = 0,
+        /// Opaque background colour, linear RGB (finite). Default black.
+        background: [f64; 3] = [0.0; 3],
+        /// Per-stage perspective parameters (f_k, d_k) of the recursive projection for N ≥ 5,
+        /// ordered (f_{N−1}, d_{N−1}), …, (f_4, d_4): `stages[0]` collapses the leading numpy
+        /// axis of the (N−1)-D retina. Either empty (every stage at its default) or exactly
+        /// N − 4 pairs of finite numbers.
+        ///
+        /// A stage places its k-D input with its centre at the origin and cells of side
+        /// `c = 2 / max(R)` (so its longest axis spans [−1, 1]; a_k is the half-length of the
+        /// collapsed axis), puts the eye at x_k = −d_k on the collapsed axis (index 0 nearest)
+        /// and maps a point to the (k−1)-D film by x_j ↦ x_j · f_k / (d_k + x_k), the course's
+        /// "divide by (d − x)/f". Output cells have the input's grid; each output cell's ray is
+        /// sampled (multilinearly, zero outside the box) at every input slice, front to back,
+        /// with the step correction of the volume mode for its oblique path length. Requires
+        /// f_k > 0 and d_k > a_k. Default d_k = [`DEFAULT_STAGE_DISTANCE`] = 3 and
+        /// f_k = d_k − a_k + c/2, which maps the nearest slice (index 0, centred at
+        /// x_k = −a_k + c/2) one-to-one onto the film; farther slices appear smaller, toward
+        /// the centre. With orthographic projection every stage is a parallel projection and
+        /// (f, d) are unused.
+        stages: Vec<(f64, f64)> = Vec::new(),
+        /// For N = 2: height in pixels of the strip (≥ 1; clipped to the picture height).
+        /// Default 32.
+        strip_height: usize = 32,
+        /// For [`CompositeMode::Slices`]: draw each slice's index in the top-left corner of its
+        /// tile (when the tile is large enough). Default true.
+        labels: bool = true,
+    }
+}
+
+/// Which keys of [`CompositeOptions::KEYS`] a table gave (see [`CompositeOptions::given`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct GivenKeys(u32);
+
+impl GivenKeys {
+    /// No key: options built in code.
+    pub const NONE: GivenKeys = GivenKeys(0);
+    /// Every key (serializing then writes every field, e.g. to list the defaults).
+    pub const ALL: GivenKeys = GivenKeys(u32::MAX >> (32 - CompositeOptions::KEYS.len()));
+
+    fn bit(key: &str) -> u32 {
+        CompositeOptions::KEYS
+            .iter()
+            .position(|k| *k == key)
+            .map_or(0, |i| 1 << i)
+    }
+
+    /// Whether `key` was given.
+    pub fn has(self, key: &str) -> bool {
+        self.0 & Self::bit(key) != 0
+    }
+
+    fn insert(&mut self, key: &str) {
+        self.0 |= Self::bit(key);
+    }
+}
+
+/// A table key: one of [`CompositeOptions::KEYS`], or serde's "unknown field" error (which
+/// the scene loader turns into `unknown key "x" (did you mean "y"?)`).
+struct Key;
+
+impl<'de> DeserializeSeed<'de> for Key {
+    type Value = &'static str;
+    fn deserialize<D: Deserializer<'de>>(self, deserializer: D) -> Result<&'static str, D::Error> {
+        deserializer.deserialize_identifier(self)
+    }
+}
+
+impl Visitor<'_> for Key {
+    type Value = &'static str;
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("the name of a composite option")
+    }
+    fn visit_str<E: de::Error>(self, v: &str) -> Result<&'static str, E> {
+        CompositeOptions::KEYS
+            .iter()
+            .find(|k| **k == v)
+            .copied()
+            .ok_or_else(|| E::unknown_field(v, CompositeOptions::KEYS))
+    }
+}
+
+/// A bad option: its key path (`opacity`, `background[1]`, `stages[0]`) and what is wrong.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OptionError {
+    /// The key, with an index for an element of a list.
+    pub key: String,
+    /// What is wrong, with the allowed range.
+    pub message: String,
+}
+
+impl From<OptionError> for NdError {
+    fn from(e: OptionError) -> NdError {
+        NdError::Value {
+            arg: e.key,
+            message: e.message,
+        }
+    }
+}
+
+fn bad(key: &str, message: impl Into<String>) -> OptionError {
+    OptionError {
+        key: key.into(),
+        message: message.into(),
+    }
+}
+
+fn finite(key: &str, v: f64) -> Result<f64, OptionError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(bad(key, format!("must be finite, got {v}")))
+    }
+}
+
+impl CompositeOptions {
+    /// These options with every key marked as given, so that serializing writes every field.
+    pub fn with_every_key(self) -> Self {
+        CompositeOptions {
+            given: GivenKeys::ALL,
+            ..self
+        }
+    }
+
+    /// Checks every value on its own, without the retina: what a scene's `[composite]` table
+    /// or a command-line flag can be checked for before anything is traced.
+    pub fn validate(&self) -> Result<(), OptionError> {
+        // Naming every field: a new option does not compile until it is considered here.
+        let CompositeOptions {
+            mode: _,
+            azimuth,
+            elevation,
+            distance,
+            zoom,
+            projection,
+            size: (w, h),
+            opacity,
+            step,
+            depth_cue,
+            axis: _,
+            background,
+            stages,
+            strip_height,
+            labels: _,
+            given: _,
+        } = self;
+        if *strip_height == 0 {
+            return Err(bad("strip_height", "must be at least 1"));
+        }
+        if *w == 0 || *h == 0 {
+            return Err(bad(
+                "size",
+                format!("width and height must be positive, got ({w}, {h})"),
+            ));
+        }
+        if w.checked_mul(*h).is_none_or(|p| p > MAX_PIXELS) {
+            return Err(bad(
+                "size",
+                format!("({w}, {h}) exceeds {MAX_PIXELS} pixels"),
+            ));
+        }
+        finite("azimuth", *azimuth)?;
+        finite("elevation", *elevation)?;
+        let dist = finite("distance", *distance)?;
+        if *projection == Projection::Perspective && !(dist > 1.0) {
+            return Err(bad(
+                "distance",
+                format!("must exceed 1 (half-diagonals of the retina cube) for a perspective view, got {dist}"),
+            ));
+        }
+        if !(dist > 0.0) {
+            return Err(bad("distance", format!("must be positive, got {dist}")));
+        }
+        if !(finite("zoom", *zoom)? > 0.0) {
+            return Err(bad("zoom", format!("must be positive, got {zoom}")));
+        }
+        if !(finite("opacity", *opacity)? >= 0.0) {
+            return Err(bad("opacity", format!("must be ≥ 0, got {opacity}")));
+        }
+        if !(0.01..=4.0).contains(&finite("step", *step)?) {
+            return Err(bad(
+                "step",
+                format!("must be in [0.01, 4] cells, got {step}"),
+            ));
+        }
+        let cue = finite("depth_cue", *depth_cue)?;
+        if !(0.0..=1.0).contains(&cue) {
+            return Err(bad("depth_cue", format!("must be in [0, 1], got {cue}")));
+        }
+        for (k, &b) in background.iter().enumerate() {
+            finite(&format!("background[{k}]"), b)?;
+        }
+        for (i, &(f, d)) in stages.iter().enumerate() {
+            let key = format!("stages[{i}]");
+            finite(&key, f)?;
+            finite(&key, d)?;
+        }
+        Ok(())
+    }
+
+    /// [`validate`](Self::validate), then the checks that depend on the retina: its numpy
+    /// `shape` (without the channel axis; N = `shape.len()` + 1) and whether it has depth.
+    pub fn validate_for(&self, shape: &[usize], has_depth: bool) -> Result<(), OptionError> {
+        self.validate()?;
+        let m = shape.len();
+        if self.depth_cue > 0.0 && !has_depth {
+            return Err(bad(
+                "depth_cue",
+                "needs the retina's depth array (e.g. a traced ndtrace.Retina)",
+            ));
+        }
+        if self.mode == CompositeMode::Slices && m >= 3 && self.axis > 2 {
+            return Err(bad(
+                "axis",
+                format!(
+                    "must be 0, 1 or 2 (an axis of the 3D volume), got {}",
+                    self.axis
+                ),
+            ));
+        }
+        // Stages: N − 4 = m − 3 of them for N ≥ 5.
+        let n_stages = m.saturating_sub(3);
+        if !self.stages.is_empty() && self.stages.len() != n_stages {
+            return Err(bad(
+                "stages",
+                format!(
+                    "expected {n_stages} (f, d) pairs for a {m}-D retina (one per axis collapsed down to 3D) \
+                     or none for the defaults, got {}",
+                    self.stages.len()
+                ),
+            ));
+        }
+        if self.projection == Projection::Perspective {
+            for (i, &(f, d)) in self.stages.iter().enumerate() {
+                let a = half_lengths(&shape[i..])[0];
+                if !(f > 0.0) || !(d > a) {
+                    return Err(bad(
+                        &format!("stages[{i}]"),
+                        format!(
+                            "(f, d) = ({f}, {d}): need f > 0 and d > {a} (the eye outside the box, \
+                             whose collapsed axis spans ±{a})"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{load_toml_str, to_toml};
+
+    /// Every key set to a value other than its default, in the order of the fields.
+    const EVERY_KEY: &str = r#"mode = "slices"
+azimuth = -10.5
+elevation = 45.0
+distance = 2.5
+zoom = 1.5
+projection = "orthographic"
+size = [320, 200]
+opacity = 0.25
+step = 0.75
+depth_cue = 0.5
+axis = 2
+background = [0.1, 0.2, 0.3]
+stages = [[2.0, 4.0]]
+strip_height = 7
+labels = false
+"#;
+
+    #[test]
+    fn every_key_sets_its_own_field_and_is_written_back() {
+        let o: CompositeOptions = toml::from_str(EVERY_KEY).unwrap();
+        let expect = CompositeOptions {
+            mode: CompositeMode::Slices,
+            azimuth: -10.5,
+            elevation: 45.0,
+            distance: 2.5,
+            zoom: 1.5,
+            projection: Projection::Orthographic,
+            size: (320, 200),
+            opacity: 0.25,
+            step: 0.75,
+            depth_cue: 0.5,
+            axis: 2,
+            background: [0.1, 0.2, 0.3],
+            stages: vec![(2.0, 4.0)],
+            strip_height: 7,
+            labels: false,
+            given: GivenKeys::ALL,
+        };
+        assert_eq!(o, expect);
+        assert_eq!(toml::to_string(&o).unwrap(), EVERY_KEY);
+        let keys: Vec<&str> = EVERY_KEY
+            .lines()
+            .map(|l| &l[..l.find(' ').unwrap()])
+            .collect();
+        assert_eq!(keys, CompositeOptions::KEYS);
+        assert!(CompositeOptions::KEYS.iter().all(|k| o.given.has(k)));
+    }
+
+    #[test]
+    fn a_table_is_written_back_with_the_keys_it_gave() {
+        // A given default (mode = "volume") stays; the order is the fields' order.
+        let o: CompositeOptions = toml::from_str("opacity = 0.6\nmode = \"volume\"\n").unwrap();
+        assert_eq!((o.mode, o.opacity), (CompositeMode::Volume, 0.6));
+        assert!(o.given.has("mode") && o.given.has("opacity") && !o.given.has("azimuth"));
+        let text = toml::to_string(&o).unwrap();
+        assert_eq!(text, "mode = \"volume\"\nopacity = 0.6\n");
+        assert_eq!(toml::from_str::<CompositeOptions>(&text).unwrap(), o);
+        // A table that gives the default mode is not the table that leaves it out.
+        assert_ne!(o, toml::from_str("opacity = 0.6").unwrap());
+        // Options built in code write what differs from the defaults.
+        let built = CompositeOptions {
+            opacity: 0.6,
+            stages: vec![(1.0, 3.0)],
+            ..Default::default()
+        };
+        assert_eq!(
+            toml::to_string(&built).unwrap(),
+            "opacity = 0.6\nstages = [[1.0, 3.0]]\n"
+        );
+        assert_eq!(toml::to_string(&CompositeOptions::default()).unwrap(), "");
+        let every = toml::to_string(&CompositeOptions::default().with_every_key()).unwrap();
+        assert_eq!(every.lines().count(), CompositeOptions::KEYS.len());
+        assert_eq!(
+            toml::from_str::<CompositeOptions>(&every).unwrap(),
+            CompositeOptions::default().with_every_key()
+        );
+    }
+
+    #[test]
+    fn unknown_duplicate_and_mistyped_keys_are_errors() {
+        let e = toml::from_str::<CompositeOptions>("opacty = 1").unwrap_err();
+        assert!(e
+            .message()
+            .starts_with("unknown field `opacty`, expected one of `mode`"));
+        let e = toml::from_str::<CompositeOptions>("mode = \"mpi\"").unwrap_err();
+        assert!(e.message().contains("unknown variant `mpi`"), "{e}");
+        assert!(toml::from_str::<CompositeOptions>("size = [1]").is_err());
+        assert!(toml::from_str::<CompositeOptions>("axis = -1").is_err());
+        assert!(toml::from_str::<CompositeOptions>("labels = 1").is_err());
+        // Duplicate keys (TOML refuses them itself; a map that has them is refused here).
+        use serde::de::value::{Error, MapDeserializer};
+        let pairs = [("opacity", 0.5), ("opacity", 0.7)];
+        let de = MapDeserializer::<_, Error>::new(pairs.into_iter());
+        let e = CompositeOptions::deserialize(de).unwrap_err();
+        assert_eq!(e.to_string(), "duplicate field `opacity`");
+    }
+
+    #[test]
+    fn validate_needs_no_retina_and_validate_for_checks_against_one() {
+        let ok = CompositeOptions::default();
+        assert_eq!(ok.validate(), Ok(()));
+        let key = |o: CompositeOptions| o.validate().unwrap_err().key;
+        assert_eq!(
+            key(CompositeOptions {
+                strip_height: 0,
+                size: (0, 0),
+                ..Default::default()
+            }),
+            "strip_height"
+        );
+        assert_eq!(
+            key(CompositeOptions {
+                stages: vec![(1.0, 3.0), (f64::INFINITY, 3.0)],
+                ..Default::default()
+            }),
+            "stages[1]"
+        );
+        // Fine on their own, wrong for the retina.
+        let slices = CompositeOptions {
+            mode: CompositeMode::Slices,
+            axis: 3,
+            depth_cue: 0.5,
+            stages: vec![(1.0, 1.05)],
+            ..Default::default()
+        };
+        assert_eq!(slices.validate(), Ok(()));
+        let for_shape = |o: &CompositeOptions, shape: &[usize], depth| {
+            o.validate_for(shape, depth).map_err(|e| e.key)
+        };
+        assert_eq!(
+            for_shape(&slices, &[4, 4, 4, 4], false).unwrap_err(),
+            "depth_cue"
+        );
+        assert_eq!(for_shape(&slices, &[4, 4, 4, 4], true).unwrap_err(), "axis");
+        let stage = CompositeOptions {
+            axis: 2,
+            ..slices.clone()
+        };
+        // A 4-axis retina has one stage. A collapsed axis of 4 cells among axes of 4 spans ±1,
+        // so the eye at d = 1.05 is outside the box and d = 0.95 inside; an axis of 2 cells
+        // spans ±0.5.
+        assert_eq!(for_shape(&stage, &[4, 4, 4, 4], true), Ok(()));
+        assert_eq!(for_shape(&stage, &[2, 4, 4, 4], true), Ok(()));
+        assert_eq!(for_shape(&stage, &[4, 4, 4], true).unwrap_err(), "stages");
+        let near = CompositeOptions {
+            stages: vec![(1.0, 0.95)],
+            ..stage
+        };
+        assert_eq!(
+            for_shape(&near, &[4, 4, 4, 4], true).unwrap_err(),
+            "stages[0]"
+        );
+        assert_eq!(for_shape(&near, &[2, 4, 4, 4], true), Ok(()));
+        // N ≤ 3 retinas have no slices axis to check (and no stages).
+        let flat = CompositeOptions {
+            stages: vec![],
+            ..slices
+        };
+        assert_eq!(for_shape(&flat, &[4, 4], true), Ok(()));
+        assert_eq!(for_shape(&flat, &[4, 4, 4], true).unwrap_err(), "axis");
+    }
+
+    const SCENE: &str = r#"dim = 4
+[camera]
+position = [0, 0, 0, 5]
+look_at = [0, 0, 0, 0]
+up = [[0, 1, 0, 0], [0, 0, 1, 0]]
+fov = 40
+resolution = [6, 5, 4]
+
+[[objects]]
+shape = "simplex"
+
+[composite]
+mode = "volume"
+opacity = 0.6
+"#;
+
+    fn scene_err(text: &str) -> String {
+        match load_toml_str(text, "scene.toml", None) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("expected an error for:\n{text}"),
+        }
+    }
+
+    /// The line and column of the first `needle` in `text`.
+    fn at(text: &str, needle: &str) -> (usize, usize) {
+        let line = text.lines().position(|l| l.contains(needle)).unwrap();
+        let col = text.lines().nth(line).unwrap().find(needle).unwrap();
+        (line + 1, col + 1)
+    }
+
+    #[test]
+    fn the_scene_table_round_trips_as_it_was_given() {
+        let (desc, _) = load_toml_str(SCENE, "scene.toml", None).unwrap();
+        let c = desc.composite.as_ref().unwrap();
+        assert_eq!((c.mode, c.opacity), (CompositeMode::Volume, 0.6));
+        let text = to_toml(&desc).unwrap();
+        assert!(
+            text.ends_with("\n[composite]\nmode = \"volume\"\nopacity = 0.6\n"),
+            "{text}"
+        );
+        let (again, _) = load_toml_str(&text, "again.toml", None).unwrap();
+        assert_eq!(again, desc);
+        assert_eq!(to_toml(&again).unwrap(), text);
+    }
+
+    #[test]
+    fn a_bad_value_gets_one_message_whichever_way_it_arrives() {
+        let rgba = vec![0f32; 4 * 5 * 6 * 4];
+        // (the line to replace, its replacement, where the bad value starts in its line)
+        let cases: [(&str, &str, &str); 8] = [
+            ("opacity = 0.6", "opacity = -1", "-1"),
+            ("opacity = 0.6", "size = [0, 10]", "[0, 10]"),
+            ("opacity = 0.6", "azimuth = nan", "nan"),
+            ("opacity = 0.6", "background = [0, inf, 0]", "inf"),
+            ("opacity = 0.6", "distance = 1", "1"),
+            ("opacity = 0.6", "step = 5", "5"),
+            ("mode = \"volume\"", "mode = \"slices\"\naxis = 3", "3"),
+            ("opacity = 0.6", "stages = [[1, 3]]", "[[1, 3]]"),
+        ];
+        for (from, to, value) in cases {
+            let text = SCENE.replace(from, to);
+            let desc: crate::scene::SceneDesc = toml::from_str(&text).unwrap();
+            let options = desc.composite.unwrap();
+            let direct = super::super::composite(&rgba, Some(&rgba[..120]), &[4, 5, 6], &options)
+                .unwrap_err()
+                .to_string();
+            let bad_line = to.lines().last().unwrap();
+            let (line, col) = at(&text, bad_line);
+            let col = col + bad_line.rfind(value).unwrap();
+            assert_eq!(
+                scene_err(&text),
+                format!("scene.toml:{line}:{col}: composite.{direct}"),
+                "{to}"
+            );
+        }
+        // Deserialization errors are located too, with suggestions.
+        let text = SCENE.replace("opacity = 0.6", "opacty = 0.6");
+        let e = scene_err(&text);
+        assert!(
+            e.ends_with("composite.opacty: unknown key \"opacty\" (did you mean \"opacity\"?)"),
+            "{e}"
+        );
+        let text = SCENE.replace("\"volume\"", "\"mpi\"");
+        let (line, col) = at(&text, "\"mpi\"");
+        assert_eq!(
+            scene_err(&text),
+            format!(
+                "scene.toml:{line}:{col}: composite.mode: unknown mode \"mpi\" (expected one of \
+                 \"volume\", \"mip\", \"first_hit\", \"slices\")"
+            )
+        );
+        // A 5D scene's retina has one stage, whose eye must be outside the box.
+        let five = SCENE
+            .replace("dim = 4", "dim = 5")
+            .replace("[0, 0, 0, 5]", "[0, 0, 0, 0, 5]")
+            .replace("[0, 0, 0, 0]", "[0, 0, 0, 0, 0]")
+            .replace(
+                "[[0, 1, 0, 0], [0, 0, 1, 0]]",
+                "[[0, 1, 0, 0, 0], [0, 0, 1, 0, 0], [0, 0, 0, 1, 0]]",
+            )
+            .replace("resolution = [6, 5, 4]", "resolution = 4");
+        assert!(load_toml_str(&five, "five.toml", None).is_ok());
+        let e = scene_err(&five.replace("opacity = 0.6", "stages = [[1, 0.5]]"));
+        assert!(
+            e.contains(": composite.stages[0]: (f, d) = (1, 0.5): need f > 0 and d > 1"),
+            "{e}"
+        );
+    }
+}
