@@ -14,6 +14,7 @@ from ._ndtrace import release_buffers
 from .composite import composite
 from .edges import edge_segments, visible_edges
 from .files import read_exr, write_exr, write_image, write_png
+from .svg import write_svg
 from .scene import Scene, load_dict, load_file, load_toml
 from . import animation
 from .animation import animate
@@ -23,6 +24,6 @@ MIN_DIM: int = _ndtrace.MIN_DIM
 MAX_DIM: int = _ndtrace.MAX_DIM
 
 __all__ = [
-    "geometry", "rotation", "frames", "mesh", "visible_edges", "edge_segments", "Scene", "Retina", "trace", "release_buffers", "composite", "read_exr", "write_exr", "write_image", "write_png", "load_file", "load_dict", "load_toml", "animation", "animate",
+    "geometry", "rotation", "frames", "mesh", "visible_edges", "edge_segments", "Scene", "Retina", "trace", "release_buffers", "composite", "read_exr", "write_exr", "write_image", "write_png", "write_svg", "load_file", "load_dict", "load_toml", "animation", "animate",
     "MIN_DIM", "MAX_DIM", "__version__",
 ]

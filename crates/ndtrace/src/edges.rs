@@ -31,10 +31,11 @@
 //! projection, away from the edge's ends) can be missed; visible or hidden pieces shorter than [`ON_EDGE`] times the edge's
 //! length are dropped.
 
-use crate::ray::Ray;
 use crate::camera::Camera;
+use crate::composite::{RetinaEdge, MAX_RETINA_DIM};
 use crate::linalg::{dot, mat_vec, sub, transpose, Vector};
 use crate::mesh::feature_edges;
+use crate::ray::Ray;
 use crate::scene::desc::Projection;
 use crate::scene::Scene;
 use crate::NdResult;
@@ -97,6 +98,45 @@ pub fn edge_segments<const N: usize>(
             })
             .collect();
         out.extend(pieces.into_iter().flatten());
+    }
+    Ok(out)
+}
+
+/// The pieces of [`edge_segments`] in retina coordinates, for the compositor
+/// ([`crate::composite::RetinaExtras::edges`]): each piece clipped to the camera's view (the
+/// hidden pieces may leave it), its ends as continuous numpy-order cell coordinates
+/// (`[ξ_{N−1}, …, ξ_1]`, cell i of an axis spanning [i, i + 1]) and their depths as the tracer
+/// measures them (distance from the eye, or from the image plane for orthographic).
+pub fn retina_edges<const N: usize>(
+    scene: &Scene<N>,
+    angle_degrees: f64,
+) -> NdResult<Vec<RetinaEdge>> {
+    let cam = &scene.camera;
+    let depth = |x: &Vector<N>| match cam.projection {
+        Projection::Perspective => crate::linalg::norm(&sub(x, &cam.position)),
+        Projection::Orthographic => camera_coords(cam, x)[N - 1],
+    };
+    let mut out = Vec::new();
+    for seg in edge_segments(scene, angle_degrees)? {
+        let (s0, s1) = view_interval(cam, &seg.a, &seg.b);
+        if !(s1 - s0 > ON_EDGE) {
+            continue;
+        }
+        let (a, b) = (lerp(&seg.a, &seg.b, s0), lerp(&seg.a, &seg.b, s1));
+        let (Some(xa), Some(xb)) = (retina_coords(cam, &a), retina_coords(cam, &b)) else {
+            continue;
+        };
+        let mut e = RetinaEdge {
+            a: [0.0; MAX_RETINA_DIM],
+            b: [0.0; MAX_RETINA_DIM],
+            depth: [depth(&a), depth(&b)],
+            visible: seg.visible,
+        };
+        for k in 0..N - 1 {
+            e.a[N - 2 - k] = xa[k];
+            e.b[N - 2 - k] = xb[k];
+        }
+        out.push(e);
     }
     Ok(out)
 }
