@@ -180,7 +180,7 @@ def test_svg_opens_and_its_lines_lie_on_the_composite_edges(tesseract, tmp_path)
     # The raster composite's edge layer: where drawing the edges changed the picture.
     with_edges = ndtrace.composite(retina, size=size, hidden_edges="none")
     without = ndtrace.composite(retina, size=size, edges=False)
-    raster = np.abs(with_edges - without)[..., :3].max(axis=2) > 0.2
+    raster = np.abs(with_edges - without)[..., :3].max(axis=2) > 0.1  # faded behind dense cells: > 0.1
     assert drawn.sum() > 300 and raster.sum() > 300
     from scipy import ndimage
 
@@ -234,5 +234,7 @@ def test_cli_svg_turntable_layout_and_cutaway(tmp_path):
     assert bad.returncode == 2 and "--cutaway" in bad.stderr
     bad = _cli(scene, "-o", png, "--cutaway", "sphere:0,0,0,-1", *common)
     assert bad.returncode == 2 and "cutaway.radius" in bad.stderr
-    bad = _cli(scene, "-o", png, "--turntable", "3", *common)
+    frames = _cli(scene, "-o", png, "--turntable", "2", *common)  # numbered PNG frames
+    assert frames.returncode == 0 and (tmp_path / "s_0001.png").exists() and (tmp_path / "s_0002.png").exists()
+    bad = _cli(scene, "-o", tmp_path / "x.jpg", "--turntable", "3", *common)
     assert bad.returncode == 2 and "--turntable" in bad.stderr

@@ -318,7 +318,8 @@ def run(argv: list[str] | None = None) -> int:
             raise UsageError(f"--turntable: writes a .gif or .mp4 (or numbered .png frames), not {args.output}")
     animating = (args.frames is not None or video_out) and args.turntable is None
     stills = tuple(IMAGE_FORMATS) + (".exr", ".svg")
-    _check_output(args.output, (".png", ".gif", ".mp4") if animating else stills, "-o")
+    _check_output(args.output, (".png", ".gif", ".mp4") if animating or args.turntable is not None
+                  else stills, "-o")
     if args.transparent and (animating or args.output.lower().endswith((".jpg", ".jpeg"))):
         raise UsageError("--transparent: GIF, MP4 and JPEG pictures are opaque; write a .png, "
                          ".webp, .tif or .exr still")

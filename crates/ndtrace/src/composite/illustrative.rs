@@ -26,7 +26,7 @@
 //! view-independent shell) which the recursive stages then project as any other.
 
 use super::{CompositeOptions, Volume};
-use crate::composite::volume::{occupied_box, Camera3};
+use crate::composite::volume::Camera3;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -372,15 +372,6 @@ impl Cues3 {
             cues,
             dark_bg: dark(o.background),
         }
-    }
-
-    /// The box, in cell coordinates, of the cells with any coverage (for `fit`).
-    pub(super) fn occupied_box(&self) -> Option<([f64; 3], [f64; 3])> {
-        let [_, ny, nx] = self.shape;
-        occupied_box(
-            [nx, ny, self.shape[0]],
-            |x, y, z| self.color[x + nx * (y + ny * z)][3],
-        )
     }
 
     /// The premultiplied volume seen by `cam`: every cell's interior, crease and silhouette

@@ -671,6 +671,9 @@ fn empty_space_skipping_changes_nothing() {
             projection,
             size: (90, 70),
             step: 0.37,
+            // First-hit's surface is at coverage ½ · min(opacity, 1) (the cells, prepared above,
+            // have alpha ½): put it at ¼ so the balls show.
+            opacity: if mode == CompositeMode::FirstHit { 0.5 } else { 1.0 },
             ..legacy()
         };
         let a = render_3d(&grid, mode, &o, [0.0; 3]);

@@ -7,7 +7,7 @@ use super::illustrative::{self, Cues3};
 use super::montage::{render_tiles, Tiles};
 use super::overlay::{self, PixelEdge, RetinaEdge};
 use super::stages::{project_stage, stage_params, stage_point};
-use super::volume::{render_view, Camera3, Grid};
+use super::volume::{occupied_box, render_view, Camera3, Grid};
 use super::{prepare, CompositeMode, CompositeOptions, Projection, RetinaExtras, Volume};
 use glam::DVec3;
 
@@ -74,6 +74,9 @@ impl View3 {
         };
         let sections = (opts.layout == ViewLayout::Sections).then(plain);
         let illustrative = opts.mode == CompositeMode::Illustrative;
+        // The framing box: the occupied cells before any cutaway, so a cut does not move the
+        // object in the picture.
+        let mut frame = None;
         let source = if illustrative {
             // The cells' colours with the depth cue (coverage unscaled: `opacity` scales the
             // interior).
@@ -82,8 +85,11 @@ impl View3 {
                 ..opts.clone()
             };
             let mut prepared = prepare(rgba, depth, cells, &unit);
-            if let (3, Some(c)) = (shape.len(), &opts.cutaway) {
-                cut(&mut prepared, shape, c);
+            if shape.len() == 3 {
+                frame = box_of(shape, &prepared);
+                if let Some(c) = &opts.cutaway {
+                    cut(&mut prepared, shape, c);
+                }
             }
             let prepared: Vec<f32> = prepared.into_iter().flatten().collect();
             let hits: Vec<f32>;
@@ -106,6 +112,7 @@ impl View3 {
                     shape: shape.to_vec(),
                     cells: classified,
                 });
+                frame = box_of(&vol.shape, &vol.cells);
                 if let Some(c) = &opts.cutaway {
                     cut(&mut vol.cells, &vol.shape, c);
                 }
@@ -113,16 +120,13 @@ impl View3 {
             }
         } else {
             let mut vol = plain();
+            frame = box_of(&vol.shape, &vol.cells);
             if let Some(c) = &opts.cutaway {
                 cut(&mut vol.cells, &vol.shape, c);
             }
             Source::Grid(Grid::new(&vol))
         };
-        let frame = match (&source, opts.fit) {
-            (_, false) => None,
-            (Source::Grid(g), true) => g.occupied_box(),
-            (Source::Cues(c), true) => c.occupied_box(),
-        };
+        let frame = if opts.fit { frame } else { None };
         let edges = if illustrative && opts.edges {
             edges_3d(extras.edges, shape, n, opts)
         } else {
@@ -207,6 +211,12 @@ impl View3 {
         }
         img
     }
+}
+
+/// The box, in cell coordinates, of the cells with alpha > 0 of a 3D volume in numpy order.
+fn box_of(shape: &[usize], cells: &[[f32; 4]]) -> Option<([f64; 3], [f64; 3])> {
+    let (nx, ny) = (shape[2], shape[1]);
+    occupied_box([nx, ny, shape[0]], |x, y, z| cells[x + nx * (y + ny * z)][3])
 }
 
 /// Copies a `qw` × `qh` block from `src` (`src_w` wide) into `dst` (`w` wide) at (x0, y0).

@@ -78,6 +78,7 @@ impl Grid {
     }
 
     /// The bounding box, in cell coordinates, of the cells with alpha > 0 (`None` if none).
+    #[cfg(test)]
     pub(super) fn occupied_box(&self) -> Option<([f64; 3], [f64; 3])> {
         occupied_box(self.n, |x, y, z| self.cell(x, y, z)[3])
     }
