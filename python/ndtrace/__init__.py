@@ -24,7 +24,9 @@ try:
     from .retina import Retina, trace
     from ._ndtrace import InternalError, release_buffers
     from .composite import composite
+    from .edges import edge_segments, visible_edges
     from .files import read_exr, write_exr, write_image, write_png
+    from .svg import write_svg
     from .scene import Scene, load_dict, load_file, load_toml
     from . import animation
     from .animation import animate
@@ -45,7 +47,7 @@ MIN_DIM: int = _ndtrace.MIN_DIM
 MAX_DIM: int = _ndtrace.MAX_DIM
 
 __all__ = [
-    "geometry", "rotation", "frames", "mesh", "Scene", "Retina", "trace", "release_buffers", "InternalError", "composite", "read_exr", "write_exr", "write_image", "write_png", "load_file", "load_dict", "load_toml", "animation", "animate",
+    "geometry", "rotation", "frames", "mesh", "visible_edges", "edge_segments", "Scene", "Retina", "trace", "release_buffers", "InternalError", "composite", "read_exr", "write_exr", "write_image", "write_png", "write_svg", "load_file", "load_dict", "load_toml", "animation", "animate",
     "display", "show", "viewer", "widget",
     "MIN_DIM", "MAX_DIM", "__version__",
 ]

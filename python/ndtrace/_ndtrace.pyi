@@ -92,6 +92,9 @@ class CompiledScene:
     def trace(
         self, threads: int | None = None, callback: Callable[[int, int], object] | None = None
     ) -> dict[str, object]: ...
+    def edge_segments(self, angle: float) -> dict[str, npt.NDArray[np.generic]]: ...
+    def retina_edges(self, angle: float) -> npt.NDArray[np.float64]: ...
+    def retina_camera(self) -> dict[str, object]: ...
 
 _MeshReader = Callable[[str, int], tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]]
 
@@ -130,6 +133,10 @@ def write_picture_exr(
 def to_srgb8(rgba: npt.NDArray[np.float32], opaque: bool = False) -> npt.NDArray[np.uint8]: ...
 def read_exr(path: str) -> dict[str, object]: ...
 
+def feature_edges(
+    dim: int, vertices: npt.NDArray[np.float64], simplices: npt.NDArray[np.uint32], angle: float
+) -> npt.NDArray[np.uint32]: ...
+
 # -- compositing ----------------------------------------------------------------------
 
 COMPOSITE_MODES: tuple[str, ...]
@@ -140,6 +147,18 @@ def composite(
     depth: npt.NDArray[np.float32] | None = None,
     options: dict[str, object] | None = None,
     threads: int | None = None,
+    normal: npt.NDArray[np.float32] | None = None,
+    camera: dict[str, object] | None = None,
+    edges: npt.NDArray[np.float64] | None = None,
 ) -> npt.NDArray[np.float32]: ...
+def picture_edges(
+    rgba: npt.NDArray[np.float32],
+    depth: npt.NDArray[np.float32] | None = None,
+    options: dict[str, object] | None = None,
+    threads: int | None = None,
+    normal: npt.NDArray[np.float32] | None = None,
+    camera: dict[str, object] | None = None,
+    edges: npt.NDArray[np.float64] | None = None,
+) -> npt.NDArray[np.float64]: ...
 def composite_defaults() -> dict[str, object]: ...
 def check_composite(options: dict[str, object], name: str) -> None: ...

@@ -150,6 +150,40 @@ class _Video:
             os.unlink(self.tmp)
 
 
+def write_frames(output: str | os.PathLike, frames: np.ndarray, fps: float, *,
+                 keep_frames: bool = False) -> list[str]:
+    """Writes pictures ``(F, H, W, 4)`` (e.g. ``composite(..., turntable=F)``) as ``out.gif`` or
+    ``out.mp4`` (with ``keep_frames`` also the numbered PNG frames beside it) or as numbered
+    frames ``out_0001.png`` … for ``out.png``; returns the paths written. Files appear
+    atomically; nothing is left half-written on an error or Ctrl-C."""
+    output = os.fspath(output)
+    frames = np.asarray(frames)
+    if frames.ndim != 4 or frames.shape[-1] != 4 or len(frames) == 0:
+        raise ValueError(f"frames: expected pictures of shape (F, H, W, 4), got {frames.shape}")
+    ext = os.path.splitext(output)[1].lower()
+    kind = {".gif": "gif", ".mp4": "mp4"}.get(ext)
+    if kind is None and ext != ".png":
+        raise ValueError(f"output {output}: expected a .gif, .mp4 or .png path")
+    if kind:
+        _video_kind(output, kind)
+    paths = frame_paths(output, len(frames))
+    write_pngs = keep_frames or kind is None
+    movie = _Video(kind, output, float(fps)) if kind else None
+    try:
+        for path, picture in zip(paths, frames):
+            if write_pngs:
+                write_png(path, picture)
+            if movie is not None:
+                movie.add(to_srgb8(picture, opaque=True))
+        if movie is not None:
+            movie.finish()
+    except BaseException:
+        if movie is not None:
+            movie.abort()
+        raise
+    return (paths if write_pngs else []) + ([movie.path] if movie is not None else [])
+
+
 def animate(
     scene: Scene,
     output: str | os.PathLike,
@@ -184,6 +218,7 @@ def animate(
     table = data["animation"]
     options = scene_options(data)
     options.update(composite or {})
+    options.pop("turntable", None)  # a frame of an animation is one picture
     count = int(table["frames"])
     cells = int(np.prod(animated.retina_shape))
     if kind == "gif":

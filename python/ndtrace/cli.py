@@ -35,6 +35,9 @@ from .scene import Scene, load_dict, load_file
 
 MODES: tuple[str, ...] = tuple(_ndtrace.RENDER_MODES)  # render.mode, as the core names them
 COMPOSITES: tuple[str, ...] = tuple(_ndtrace.COMPOSITE_MODES)  # composite.mode
+LAYOUTS = ("single", "sections", "stereo")  # composite.layout
+#: Frames per second of a turntable video.
+TURNTABLE_FPS = 12.0
 
 
 class UsageError(Exception):
@@ -102,7 +105,8 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument("scene", help="a .toml scene, or a .py script defining scene() -> ndtrace.Scene")
     p.add_argument("-o", "--output", required=True,
-                   help="the picture to write: .png, .jpg, .webp, .tif or .exr; for an animation "
+                   help="the picture to write: .png, .jpg, .webp, .tif, .exr or .svg (the feature "
+                   "edges with exact N-D visibility, as vector paths); for an animation "
                    ".gif or .mp4 (the video), or .png (numbered frames out_0001.png … plus a video)")
     p.add_argument("--retina", metavar="FILE.exr", help="also write the traced retina there")
     p.add_argument("--resolution", help="cells per retina axis: R or R1,R2,… (overrides the camera's)")
@@ -113,6 +117,17 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--composite", choices=COMPOSITES, help="how the retina becomes a picture")
     p.add_argument("--view", metavar="AZIMUTH,ELEVATION", help="compositing camera angles, degrees")
     p.add_argument("--size", metavar="WxH", help="picture size in pixels")
+    p.add_argument("--layout", choices=LAYOUTS,
+                   help="for N ≥ 4: one view, the view with three orthogonal sections, or a stereo pair")
+    p.add_argument("--section", metavar="X,Y,Z",
+                   help="the point the sections pass through (volume coordinates, [-1, 1])")
+    p.add_argument("--stereo-angle", type=float, metavar="DEGREES", help="between the stereo pair's eyes")
+    p.add_argument("--cutaway", metavar="SPEC",
+                   help="remove part of the volume: half_space:NX,NY,NZ[,OFFSET], "
+                   "sphere:CX,CY,CZ,R or box:X0,Y0,Z0,X1,Y1,Z1 (volume coordinates)")
+    p.add_argument("--turntable", type=int, metavar="F",
+                   help="with -o .gif/.mp4 (or .png: numbered frames): F frames of the compositing "
+                   "camera orbiting one traced retina")
     p.add_argument("--frames", type=int, metavar="K",
                    help="render K frames of the scene's [animation] (implied by -o .gif/.mp4)")
     p.add_argument("--video", choices=("gif", "mp4", "none"), default="gif",
@@ -220,6 +235,32 @@ def _ints(text: str, option: str, sep: str = ",", positive: bool = True) -> list
     return values
 
 
+def _floats(text: str, option: str, count: int | tuple[int, ...]) -> list[float]:
+    counts = (count,) if isinstance(count, int) else count
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise UsageError(f"{option}: expected numbers separated by ',', got {text!r}") from None
+    if len(values) not in counts:
+        raise UsageError(f"{option}: expected {' or '.join(map(str, counts))} numbers, got {text!r}")
+    return values
+
+
+def _cutaway(text: str) -> dict:
+    """``--cutaway`` SPEC → the ``composite.cutaway`` table."""
+    shape, _, numbers = text.partition(":")
+    if shape == "half_space":
+        v = _floats(numbers, "--cutaway half_space", (3, 4))
+        return {"shape": shape, "normal": v[:3], "offset": v[3] if len(v) == 4 else 0.0}
+    if shape == "sphere":
+        v = _floats(numbers, "--cutaway sphere", 4)
+        return {"shape": shape, "center": v[:3], "radius": v[3]}
+    if shape == "box":
+        v = _floats(numbers, "--cutaway box", 6)
+        return {"shape": shape, "min": v[:3], "max": v[3:]}
+    raise UsageError(f"--cutaway: expected half_space:…, sphere:… or box:…, got {text!r}")
+
+
 def _composite_flags(args: argparse.Namespace) -> dict:
     """The ``[composite]`` keys the flags set. The core checks each flag's keys as it checks a
     scene's table, so an error names the flag and the key: ``--size: composite.size: …``."""
@@ -237,6 +278,16 @@ def _composite_flags(args: argparse.Namespace) -> dict:
         if len(size) != 2:
             raise UsageError(f"--size: expected WxH, got {args.size!r}")
         flags.append(("--size", {"size": size}))
+    if args.layout:
+        flags.append(("--layout", {"layout": args.layout}))
+    if args.section:
+        flags.append(("--section", {"section": _floats(args.section, "--section", 3)}))
+    if args.stereo_angle is not None:
+        flags.append(("--stereo-angle", {"stereo_angle": args.stereo_angle}))
+    if args.cutaway:
+        flags.append(("--cutaway", {"cutaway": _cutaway(args.cutaway)}))
+    if args.turntable is not None:
+        flags.append(("--turntable", {"turntable": args.turntable}))
     keys: dict = {}
     for flag, values in flags:
         _ndtrace.check_composite(values, flag)
@@ -300,9 +351,16 @@ def _check_output(path: str, exts: tuple[str, ...], option: str) -> None:
 def run(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     # 1. Validate everything before any work or progress output.
-    animating = args.frames is not None or args.output.lower().endswith((".gif", ".mp4"))
-    stills = tuple(IMAGE_FORMATS) + (".exr",)
-    _check_output(args.output, (".png", ".gif", ".mp4") if animating else stills, "-o")
+    video_out = args.output.lower().endswith((".gif", ".mp4"))
+    if args.turntable is not None:
+        if args.frames is not None:
+            raise UsageError("--turntable: orbits one traced retina; it does not combine with --frames")
+        if not args.output.lower().endswith((".gif", ".mp4", ".png")):
+            raise UsageError(f"--turntable: writes a .gif or .mp4 (or numbered .png frames), not {args.output}")
+    animating = (args.frames is not None or video_out) and args.turntable is None
+    stills = tuple(IMAGE_FORMATS) + (".exr", ".svg")
+    _check_output(args.output, (".png", ".gif", ".mp4") if animating or args.turntable is not None
+                  else stills, "-o")
     if args.transparent and (animating or args.output.lower().endswith((".jpg", ".jpeg"))):
         raise UsageError("--transparent: GIF, MP4 and JPEG pictures are opaque; write a .png, "
                          ".webp, .tif or .exr still")
@@ -346,6 +404,12 @@ def run(argv: list[str] | None = None) -> int:
     if comp:
         data["composite"] = comp
     scene = load_dict(data, base=scene._base or os.path.dirname(os.path.abspath(args.scene)))
+    turntable = int(comp.get("turntable") or 0)
+    if animating and turntable and args.frames is None:
+        animating = False  # the scene's [composite] asks for a turntable
+    if turntable and not args.output.lower().endswith((".gif", ".mp4", ".png")):
+        raise UsageError(f"composite.turntable: writes a .gif or .mp4 (or numbered .png frames), "
+                         f"not {args.output}")
 
     # 2. Trace, then composite, with a progress bar.
     from .composite import composite
@@ -370,10 +434,31 @@ def run(argv: list[str] | None = None) -> int:
     bar.begin("tracing")
     retina = trace(scene, threads=args.threads, progress=bar.update)
     bar.end()
+    if args.output.lower().endswith(".svg"):
+        from .svg import write_svg
+
+        if turntable:
+            raise UsageError("--turntable: an SVG is one drawing; write a .gif, .mp4 or .png")
+        if args.retina:
+            write_exr(args.retina, retina)
+        write_svg(args.output, retina, threads=args.threads, **_picture_options(scene, False))
+        if not args.quiet:
+            print(f"wrote {args.output}" + (f" and {args.retina}" if args.retina else ""), file=sys.stderr)
+        return 0
     bar.begin("compositing")
     picture = composite(retina, **_picture_options(scene, args.transparent))
     bar.update(1, 1)
     bar.end()
+    if turntable:
+        from .animation import write_frames
+
+        if args.retina:
+            write_exr(args.retina, retina)
+        paths = write_frames(args.output, picture, TURNTABLE_FPS, keep_frames=args.keep_frames)
+        if not args.quiet:
+            print("wrote " + (f"{len(paths)} frames {paths[0]} … {paths[-1]}" if len(paths) > 2
+                              else " and ".join(paths)), file=sys.stderr)
+        return 0
 
     # 3. Write (each file atomically).
     if args.retina:

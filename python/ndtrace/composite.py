@@ -38,7 +38,7 @@ def _array(name: str, value) -> np.ndarray:
 def composite(
     retina,
     *,
-    mode: str = "volume",
+    mode: str = "illustrative",
     azimuth: float = 30.0,
     elevation: float = 20.0,
     distance: float = 4.0,
@@ -53,10 +53,21 @@ def composite(
     stages: Sequence[tuple[float, float]] | None = None,
     strip_height: int = 32,
     labels: bool = True,
+    fit: bool = True,
+    crease_angle: float = 20.0,
+    edges: bool = True,
+    edge_width: float = 0.0,
+    edge_color: Sequence[float] | None = None,
+    hidden_edges: str = "dashed",
+    layout: str = "single",
+    section: Sequence[float] = (0.0, 0.0, 0.0),
+    stereo_angle: float = 6.0,
+    cutaway: dict | None = None,
+    turntable: int = 0,
     threads: int | None = None,
 ) -> np.ndarray:
     """Composites a retina into a 2D picture: a float32 array ``(H, W, 4)``, linear RGBA, row 0
-    at the top.
+    at the top (with ``turntable=F``: its F frames, ``(F, H, W, 4)``).
 
     **RGB is the retina composited over the opaque** ``background`` (``C + (1 − A)·bg``, C the
     accumulated premultiplied colour); **alpha is the opacity A of the retina's content alone**
@@ -82,12 +93,19 @@ def composite(
 
     Keywords (defaults in brackets):
 
-    * ``mode`` ["volume"] — for 3D volumes: ``"volume"`` (front-to-back emission–absorption
+    * ``mode`` ["illustrative"] — for 3D volumes: ``"illustrative"`` (the default: nearly clear
+      cells in their 4D-lit colour, with opacity where the retina has structure — creases
+      between cells whose 4D normals differ by more than ``crease_angle``, occlusion contours,
+      silhouettes seen edge-on — and, for a :class:`Retina` traced from a scene, its feature
+      edges drawn over it with exact N-D visibility: visible ones solid, hidden ones per
+      ``hidden_edges``; ``opacity`` scales the cells' interior opacity), ``"volume"``
+      (front-to-back emission–absorption
       with trilinear sampling every ``step`` cells; a cell's alpha is its opacity over one cell,
       so a uniform slab of alpha a, L cells thick, has opacity exactly 1 − (1 − a)^L whatever the
       step; rays stop once transmittance < 1e-4), ``"mip"`` (maximum intensity projection: the
-      crossed cell of largest luminance, shown unchanged), ``"first_hit"`` (the nearest crossed
-      cell with alpha > 0, opaque in its own colour: crisp cubes and silhouettes) or
+      crossed cell of largest luminance, shown unchanged), ``"first_hit"`` (the nearest point
+      where the interpolated coverage reaches ½ — times ``opacity``, at most 1 — opaque in
+      its colour there: a smooth surface, not voxel terraces) or
       ``"slices"`` (a near-square montage of the 2D slices along ``axis``, slice k in tile row
       k // cols and column k % cols, cols = ⌈√count⌉, 1-pixel grey separators, the index in each
       tile's corner in a built-in 3×5 font when ``labels``).
@@ -113,6 +131,32 @@ def composite(
       slice 0 maps one-to-one (farther slices appear smaller).
     * ``strip_height`` [32] — for N = 2.
     * ``labels`` [True] — slice numbers in the montage.
+    * ``fit`` [True] — for N ≥ 4: frame the box of the occupied cells (``distance`` then counts
+      in its half-diagonals), so the object fills the picture; False frames the whole retina.
+    * ``crease_angle`` [20] — degrees, 0 … 90: the illustrative mode's creases and the feature
+      edges (:func:`ndtrace.mesh.feature_edges`).
+    * ``edges`` [True] — the illustrative mode draws the scene's feature edges (a retina from
+      :func:`ndtrace.trace`; a raw array or a retina read from a file has none).
+    * ``edge_width`` [0 = automatic, max(1, min(W, H)/300)] — pixels, 0 … 64.
+    * ``edge_color`` [None = near-white on dark backgrounds, near-black on light ones] — linear
+      RGB; with ``depth_cue`` > 0 edges are also tinted by N-D depth.
+    * ``hidden_edges`` ["dashed"] — pieces hidden in N-D: ``"dashed"``, ``"faint"`` or
+      ``"none"``.
+    * ``layout`` ["single"] — for N ≥ 4: ``"sections"`` puts the view in the top-left quadrant
+      and three orthogonal sections through ``section`` in the others (top right across z:
+      the retina slice face-on; bottom left across x: z right, y up; bottom right across y:
+      x right, z down); ``"stereo"`` a side-by-side pair for parallel viewing, the left half
+      from ``azimuth − stereo_angle/2``, the right from ``azimuth + stereo_angle/2``.
+    * ``section`` [(0, 0, 0)] — the world point (volume centred, longest side spanning
+      [−1, 1]; x columns, y up, z slices) the sections pass through.
+    * ``stereo_angle`` [6] — degrees between the eyes of the stereo pair, 0 … 30.
+    * ``cutaway`` [None] — for N ≥ 4: a region of the 3D volume removed so its inside shows,
+      in the same world coordinates: ``{"shape": "half_space", "normal": [x, y, z],
+      "offset": d}`` (removes n̂·x > d), ``{"shape": "sphere", "center": [...], "radius": r}``
+      or ``{"shape": "box", "min": [...], "max": [...]}``; cells are removed smoothly by the
+      fraction of a cell inside, and feature edges are cut with them.
+    * ``turntable`` [0] — F > 0 returns F frames, frame k seen from ``azimuth + 360°·k/F``:
+      motion parallax for the price of one trace (the retina is prepared once).
     * ``threads`` [None = every core] — the picture is bit-identical whatever the number.
 
     Raises ValueError naming the argument on bad input.
@@ -140,12 +184,25 @@ def composite(
         size = (shape[1], shape[0]) if len(shape) == 2 else (shape[0], strip_height) if len(shape) == 1 else (512, 512)
     options = dict(mode=mode, azimuth=azimuth, elevation=elevation, distance=distance, zoom=zoom,
                    projection=projection, size=size, opacity=opacity, step=step, depth_cue=depth_cue,
-                   axis=axis, strip_height=strip_height, labels=labels)
+                   axis=axis, strip_height=strip_height, labels=labels, fit=fit,
+                   crease_angle=crease_angle, edges=edges, edge_width=edge_width,
+                   hidden_edges=hidden_edges, layout=layout, section=section,
+                   stereo_angle=stereo_angle, turntable=turntable)
+    if cutaway is not None:
+        options["cutaway"] = cutaway
     if background is not None:
         options["background"] = background
     if stages is not None:
         options["stages"] = stages
-    return _ndtrace.composite(rgba, depth, _plain(options), threads)
+    if edge_color is not None:
+        options["edge_color"] = edge_color
+    normal = camera = lines = None
+    if isinstance(retina, Retina) and mode == "illustrative" and len(shape) >= 3:
+        normal = _array("retina.normal", retina.normal)
+        camera = retina._camera_info()
+        if edges:
+            lines = retina._edges(crease_angle)
+    return _ndtrace.composite(rgba, depth, _plain(options), threads, normal, camera, lines)
 
 
 def scene_options(description: dict) -> dict:

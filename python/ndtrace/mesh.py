@@ -15,6 +15,7 @@ Every function takes and returns such a pair, so they compose::
 
     vertices, simplices = ndtrace.mesh.convex_hull(points)            # outward hull, N = 2…8
     vertices, simplices = ndtrace.mesh.orient(vertices, simplices)    # repair orientation
+    edges = ndtrace.mesh.feature_edges(vertices, simplices)           # the polytope's edges
     vertices, simplices = ndtrace.mesh.read("bunny.obj")               # meshio formats, .npz
     scene.add_object("mesh", mesh=(vertices, simplices))               # or a trimesh / meshio mesh
 
@@ -29,6 +30,7 @@ in the hyperplane x_3 = 0 of R^4).
 from __future__ import annotations
 
 import errno
+import numbers
 import os
 
 import numpy as np
@@ -36,7 +38,7 @@ import numpy as np
 from . import _ndtrace
 from .geometry import generalized_cross
 
-__all__ = ["convex_hull", "orient", "read", "from_object", "CELL_TYPES"]
+__all__ = ["convex_hull", "orient", "feature_edges", "read", "from_object", "CELL_TYPES"]
 
 #: The meshio cell types that hold the (N−1)-simplices of a dimension-N scene ("quad" cells are
 #: split into two triangles).
@@ -309,3 +311,50 @@ def _scene_reader(path: str, dim: int) -> tuple[np.ndarray, np.ndarray]:
     except ValueError as e:
         message = str(e)
         raise ValueError(message[len(path) + 2:] if message.startswith(path + ": ") else message) from None
+
+
+def _angle(angle) -> float:
+    if isinstance(angle, bool) or not isinstance(angle, numbers.Real):
+        raise ValueError(f"angle: expected a number of degrees, got {angle!r}")
+    return float(angle)
+
+
+def feature_edges(vertices, simplices, angle: float = 20.0) -> np.ndarray:
+    """The 1-dimensional edges of a mesh's polytope structure: an int64 array ``(E, 2)``, each
+    row a vertex pair ``i < j``, rows sorted.
+
+    ``vertices`` is ``(V, N)`` and ``simplices`` ``(S, N)`` (each row the N vertex indices of
+    an (N−1)-simplex), N = 2…8. A ridge (an (N−2)-face) is a *crease* when two simplices
+    sharing it have unit normals more than ``angle`` degrees apart — comparing lines, not signs,
+    so the orientation of the input does not matter — or when only one simplex has it; an edge
+    is a feature edge when the creases through it do not all lie in one 2-plane (for N = 3 the
+    creases are the edges; for N ≥ 5 the same rule is applied down the face dimensions). A
+    tesseract gives its 32 edges, the 16-cell 24, a finely tessellated 3-sphere none.
+
+    Vertices with identical coordinates are welded (the smallest index is returned), and
+    zero-volume simplices — Qhull's triangulated facets contain some — do not break a flat cell
+    or a crease. Runs in parallel in the core; a million simplices take seconds.
+    """
+    v = np.asarray(vertices)
+    s = np.asarray(simplices)
+    if v.ndim != 2 or not (_ndtrace.MIN_DIM <= v.shape[1] <= _ndtrace.MAX_DIM):
+        raise ValueError(f"vertices: expected shape (V, N) with N in 2…8, got {v.shape}")
+    n = v.shape[1]
+    if not (np.issubdtype(v.dtype, np.floating) or np.issubdtype(v.dtype, np.integer)):
+        raise ValueError(f"vertices: expected real numbers, got dtype {v.dtype}")
+    if s.ndim != 2 or s.shape[1] != n:
+        raise ValueError(f"simplices: expected shape (S, {n}) (N vertex indices per simplex), "
+                         f"got {s.shape}")
+    if s.size and not np.issubdtype(s.dtype, np.integer):
+        raise ValueError(f"simplices: expected integer indices, got dtype {s.dtype}")
+    if s.size and (s.min() < 0 or s.max() >= len(v)):
+        bad = int(np.argmax((s < 0).any(1) | (s >= len(v)).any(1)))
+        raise ValueError(f"simplices: row {bad} names a vertex outside 0…{len(v) - 1}: "
+                         f"{s[bad].tolist()}")
+    out = _ndtrace.feature_edges(
+        n,
+        np.ascontiguousarray(v, dtype=np.float64).reshape(-1),
+        np.ascontiguousarray(s, dtype=np.uint32).reshape(-1),
+        _angle(angle),
+    )
+    return np.asarray(out, dtype=np.int64).reshape(-1, 2)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -33,6 +33,36 @@ class Retina:
     primitive_id: np.ndarray
     camera: str | None = None
     """The scene's ``[camera]`` section as TOML (stored in retina files)."""
+    _source: object = field(default=None, repr=False, compare=False)
+    """The compiled scene this retina was traced from (its edges and camera), if any."""
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def _camera_info(self) -> dict | None:
+        """The camera as the compositor needs it (orientation, cell size, projection): from the
+        scene it was traced from, or rebuilt from :attr:`camera` (a retina read from a file)."""
+        if "camera" not in self._cache:
+            info = None
+            if self._source is not None:
+                info = self._source.retina_camera()
+            elif self.camera:
+                from .scene import load_toml
+
+                try:
+                    info = load_toml(f"dim = {self.dim}\n{self.camera}\n").compiled().retina_camera()
+                except ValueError:
+                    info = None
+            self._cache["camera"] = info
+        return self._cache["camera"]
+
+    def _edges(self, angle: float) -> np.ndarray | None:
+        """The scene's feature-edge pieces in retina coordinates (rows ``[a, b, depth_a,
+        depth_b, visible]``) for crease angle ``angle``, or None without a scene."""
+        if self._source is None:
+            return None
+        key = ("edges", float(angle))
+        if key not in self._cache:
+            self._cache[key] = np.asarray(self._source.retina_edges(float(angle)))
+        return self._cache[key]
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -79,4 +109,4 @@ def trace(
         raise ValueError(f"threads: expected a positive integer or None, got {threads!r}")
     compiled = scene.compiled()
     out = compiled.trace(threads, progress)
-    return Retina(**out, camera=compiled.camera_toml())
+    return Retina(**out, camera=compiled.camera_toml(), _source=compiled)

@@ -5,7 +5,10 @@
 //! them.
 
 use crate::errors::{guarded, to_py_err};
-use ndtrace::composite::{self as core, CompositeMode, CompositeOptions, Projection};
+use ndtrace::composite::{
+    self as core, CompositeMode, CompositeOptions, Projection, RetinaCamera, RetinaEdge,
+    RetinaExtras, MAX_RETINA_DIM,
+};
 use ndtrace::scene::{self, PathError};
 use ndtrace::{names, NdError};
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
@@ -20,19 +23,30 @@ fn options_from(dict: &Bound<'_, PyAny>) -> Result<CompositeOptions, PathError> 
     scene::deserialize(&mut pythonize::Depythonizer::from_object(dict))
 }
 
-/// Composites a retina into a picture with the options of the dict `options` (None: every
-/// default); `threads=None` uses every core (the picture is the same whatever the number).
-#[pyfunction]
-#[pyo3(signature = (rgba, depth=None, options=None, threads=None))]
-fn composite<'py>(
-    py: Python<'py>,
-    rgba: Arr<'py>,
-    depth: Option<Arr<'py>>,
-    options: Option<&Bound<'py, PyAny>>,
-    threads: Option<usize>,
-) -> PyResult<Bound<'py, PyAny>> {
-    let opts = match options {
-        None => CompositeOptions::default(),
+/// A retina and its extras, checked and borrowed from the numpy arrays.
+struct Input<'a> {
+    shape: Vec<usize>,
+    rgba: &'a [f32],
+    depth: Option<&'a [f32]>,
+    normal: Option<&'a [f32]>,
+    camera: Option<RetinaCamera>,
+    edges: Vec<RetinaEdge>,
+}
+
+impl Input<'_> {
+    fn extras(&self) -> RetinaExtras<'_> {
+        RetinaExtras {
+            normal: self.normal,
+            camera: self.camera.clone(),
+            edges: &self.edges,
+        }
+    }
+}
+
+/// The options of the dict (None: every default), errors naming the key.
+fn options_arg(options: Option<&Bound<'_, PyAny>>) -> PyResult<CompositeOptions> {
+    match options {
+        None => Ok(CompositeOptions::default()),
         Some(dict) => options_from(dict).map_err(|e| {
             let arg = if e.path.is_empty() {
                 "options".to_string()
@@ -43,8 +57,17 @@ fn composite<'py>(
                 arg,
                 message: e.message,
             })
-        })?,
-    };
+        }),
+    }
+}
+
+fn input<'a>(
+    rgba: &'a Arr<'_>,
+    depth: &'a Option<Arr<'_>>,
+    normal: &'a Option<Arr<'_>>,
+    camera: Option<&Bound<'_, PyAny>>,
+    edges: &Option<PyReadonlyArrayDyn<'_, f64>>,
+) -> PyResult<Input<'a>> {
     let dims = rgba.shape().to_vec();
     if dims.len() < 2 || dims[dims.len() - 1] != 4 {
         return Err(PyValueError::new_err(format!(
@@ -55,7 +78,7 @@ fn composite<'py>(
     let rgba = rgba
         .as_slice()
         .map_err(|_| PyValueError::new_err("retina: expected a C-contiguous float32 rgba array"))?;
-    let depth = match &depth {
+    let depth = match depth {
         Some(d) => {
             if d.shape() != shape.as_slice() {
                 return Err(PyValueError::new_err(format!(
@@ -69,16 +92,167 @@ fn composite<'py>(
         }
         None => None,
     };
+    let m = shape.len();
+    let normal = match normal {
+        Some(nrm) => {
+            let mut want = shape.clone();
+            want.push(m + 1);
+            if nrm.shape() != want.as_slice() {
+                return Err(PyValueError::new_err(format!(
+                    "normal: expected shape {want:?} (the retina's cells × N), got {:?}",
+                    nrm.shape()
+                )));
+            }
+            Some(nrm.as_slice().map_err(|_| {
+                PyValueError::new_err("normal: expected a C-contiguous float32 array")
+            })?)
+        }
+        None => None,
+    };
+    let camera = match camera {
+        Some(c) => Some(RetinaCamera {
+            orientation: c.get_item("orientation")?.extract()?,
+            cell: c.get_item("cell")?.extract()?,
+            perspective: c.get_item("perspective")?.extract()?,
+        }),
+        None => None,
+    };
+    let edges: Vec<RetinaEdge> = match edges {
+        None => Vec::new(),
+        Some(e) => {
+            let width = 2 * m + 3;
+            let flat = e.as_slice().map_err(|_| {
+                PyValueError::new_err("edges: expected a C-contiguous float64 array")
+            })?;
+            if m > MAX_RETINA_DIM || flat.len() % width != 0 {
+                return Err(PyValueError::new_err(format!(
+                    "edges: expected rows of {width} floats (two ends of {m} coordinates, two depths, visible)"
+                )));
+            }
+            flat.chunks_exact(width)
+                .map(|r| {
+                    let mut e = RetinaEdge {
+                        a: [0.0; MAX_RETINA_DIM],
+                        b: [0.0; MAX_RETINA_DIM],
+                        depth: [r[2 * m], r[2 * m + 1]],
+                        visible: r[2 * m + 2] != 0.0,
+                    };
+                    e.a[..m].copy_from_slice(&r[..m]);
+                    e.b[..m].copy_from_slice(&r[m..2 * m]);
+                    e
+                })
+                .collect()
+        }
+    };
+    Ok(Input {
+        shape,
+        rgba,
+        depth,
+        normal,
+        camera,
+        edges,
+    })
+}
+
+/// Composites a retina into a picture `(H, W, 4)` with the options of the dict `options` (None:
+/// every default), or with `turntable = F > 0` into its F frames `(F, H, W, 4)`;
+/// `threads=None` uses every core (the picture is the same whatever the number).
+///
+/// `normal` (the retina's `(..., N)` float32 normals), `camera` (a dict with `orientation`,
+/// N×N row-major floats, `cell` and `perspective`) and `edges` (float64 rows
+/// `[a (N−1), b (N−1), depth_a, depth_b, visible]`) are what the illustrative mode uses.
+#[pyfunction]
+#[pyo3(signature = (rgba, depth=None, options=None, threads=None, normal=None, camera=None, edges=None))]
+#[allow(clippy::too_many_arguments)]
+fn composite<'py>(
+    py: Python<'py>,
+    rgba: Arr<'py>,
+    depth: Option<Arr<'py>>,
+    options: Option<&Bound<'py, PyAny>>,
+    threads: Option<usize>,
+    normal: Option<Arr<'py>>,
+    camera: Option<&Bound<'py, PyAny>>,
+    edges: Option<PyReadonlyArrayDyn<'py, f64>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let opts = options_arg(options)?;
+    let inp = input(&rgba, &depth, &normal, camera, &edges)?;
+    let extras = inp.extras();
     let pool = crate::thread_pool(threads)?;
-    let run = || core::composite(rgba, depth, &shape, &opts);
-    let image = py.detach(|| {
+    let frames = opts.turntable;
+    let run = || {
+        if frames == 0 {
+            core::composite_retina(inp.rgba, inp.depth, &inp.shape, &extras, &opts).map(|i| vec![i])
+        } else {
+            core::composite_turntable(inp.rgba, inp.depth, &inp.shape, &extras, &opts, frames)
+        }
+    };
+    let images = py.detach(|| {
         guarded("composite", || match &pool {
             Some(p) => p.install(run),
             None => run(),
         })
     })?;
-    Ok(PyArray1::from_vec(py, image.rgba)
-        .reshape([image.height, image.width, 4])?
+    let (h, w) = (images[0].height, images[0].width);
+    let count = images.len();
+    let flat: Vec<f32> = images.into_iter().flat_map(|i| i.rgba).collect();
+    let array = PyArray1::from_vec(py, flat);
+    if frames == 0 {
+        Ok(array.reshape([h, w, 4])?.into_any())
+    } else {
+        Ok(array.reshape([count, h, w, 4])?.into_any())
+    }
+}
+
+/// The feature-edge pieces the illustrative picture of `options` draws (one view), as float64
+/// rows `[x0, y0, x1, y1, depth0, depth1, r, g, b, visible]`: ends in picture pixels (x right,
+/// y down), their N-D depths, the piece's linear RGB (at its middle's depth) as the picture
+/// draws it.
+#[pyfunction]
+#[pyo3(signature = (rgba, depth=None, options=None, threads=None, normal=None, camera=None, edges=None))]
+#[allow(clippy::too_many_arguments)]
+fn picture_edges<'py>(
+    py: Python<'py>,
+    rgba: Arr<'py>,
+    depth: Option<Arr<'py>>,
+    options: Option<&Bound<'py, PyAny>>,
+    threads: Option<usize>,
+    normal: Option<Arr<'py>>,
+    camera: Option<&Bound<'py, PyAny>>,
+    edges: Option<PyReadonlyArrayDyn<'py, f64>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let opts = options_arg(options)?;
+    let inp = input(&rgba, &depth, &normal, camera, &edges)?;
+    let extras = inp.extras();
+    let pool = crate::thread_pool(threads)?;
+    let run = || core::picture_edges(inp.rgba, inp.depth, &inp.shape, &extras, &opts);
+    let pieces = py.detach(|| {
+        guarded("picture_edges", || match &pool {
+            Some(p) => p.install(run),
+            None => run(),
+        })
+    })?;
+    let count = pieces.len();
+    let colors = core::overlay::EdgeColors::new(&pieces, &opts);
+    let flat: Vec<f64> = pieces
+        .iter()
+        .flat_map(|e| {
+            let c = colors.at(0.5 * (e.depth[0] + e.depth[1]));
+            [
+                e.p[0][0],
+                e.p[0][1],
+                e.p[1][0],
+                e.p[1][1],
+                e.depth[0],
+                e.depth[1],
+                f64::from(c[0]),
+                f64::from(c[1]),
+                f64::from(c[2]),
+                f64::from(u8::from(e.visible)),
+            ]
+        })
+        .collect();
+    Ok(PyArray1::from_vec(py, flat)
+        .reshape([count, 10])?
         .into_any())
 }
 
@@ -113,6 +287,7 @@ fn check_composite(options: &Bound<'_, PyAny>, name: &str) -> PyResult<()> {
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add_function(wrap_pyfunction!(composite, m)?)?;
+    m.add_function(wrap_pyfunction!(picture_edges, m)?)?;
     m.add_function(wrap_pyfunction!(composite_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(check_composite, m)?)?;
     m.add(

@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 
 mod buffers;
 mod composite;
+mod edges;
 mod errors;
 mod files;
 mod geometry;
@@ -44,6 +45,7 @@ fn _ndtrace(m: &Bound<'_, PyModule>) -> PyResult<()> {
     rotation::register(m)?;
     scene::register(m)?;
     composite::register(m)?;
+    edges::register(m)?;
     files::register(m)?;
     mesh::register(m)?;
     Ok(())

@@ -68,6 +68,57 @@ impl CompiledScene {
             .map_err(to_py_err)
     }
 
+    /// Every object's feature edges (crease angle `angle`, degrees) split into the pieces the
+    /// camera sees and those it does not: flat arrays for `ndtrace.edge_segments`.
+    fn edge_segments<'py>(&self, py: Python<'py>, angle: f64) -> PyResult<Bound<'py, PyDict>> {
+        let scene = &self.scene;
+        with_scene!(scene, s, _N => {
+            let segs = py.detach(|| guarded("edge_segments", || ndtrace::edges::edge_segments(s, angle)))?;
+            crate::edges::segments_dict(py, &segs)
+        })
+    }
+
+    /// The feature-edge pieces in retina coordinates (`ndtrace.composite`'s `edges`): float64
+    /// rows `[a (N−1), b (N−1), depth_a, depth_b, visible]`, flat.
+    fn retina_edges<'py>(
+        &self,
+        py: Python<'py>,
+        angle: f64,
+    ) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
+        let scene = &self.scene;
+        let rows = with_scene!(scene, s, _N => py
+            .detach(|| guarded("retina_edges", || ndtrace::edges::retina_edges(s, angle)))?
+            .into_iter()
+            .flat_map(|e| {
+                let m = _N - 1;
+                let mut r = Vec::with_capacity(2 * m + 3);
+                r.extend_from_slice(&e.a[..m]);
+                r.extend_from_slice(&e.b[..m]);
+                r.extend_from_slice(&e.depth);
+                r.push(f64::from(u8::from(e.visible)));
+                r
+            })
+            .collect::<Vec<f64>>());
+        Ok(numpy::PyArray1::from_vec(py, rows))
+    }
+
+    /// The camera as the compositor needs it: a dict with `orientation` (N×N row-major),
+    /// `cell` (side of a cell, at unit distance for perspective) and `perspective`.
+    fn retina_camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        with_scene!(&self.scene, s, _N => {
+            let c = &s.camera;
+            let flat: Vec<f64> = c.orientation.iter().flatten().copied().collect();
+            d.set_item("orientation", flat)?;
+            d.set_item("cell", c.cell)?;
+            d.set_item(
+                "perspective",
+                c.projection == ndtrace::scene::desc::Projection::Perspective,
+            )?;
+        });
+        Ok(d)
+    }
+
     /// The description as TOML.
     fn to_toml(&self) -> PyResult<String> {
         scene::to_toml(&self.desc).map_err(to_py_err)

@@ -26,6 +26,7 @@ pub mod camera;
 pub mod composite;
 pub mod convex;
 pub mod dim;
+pub mod edges;
 pub mod error;
 pub mod files;
 pub mod geometry;

@@ -41,23 +41,30 @@
 //! Work is split over output rows with rayon; every pixel depends only on the inputs and its
 //! own coordinates, so the picture is bit-identical whatever the number of threads.
 
+mod aids;
+pub mod illustrative;
 mod montage;
 mod options;
+pub mod overlay;
 mod stages;
+mod view;
 mod volume;
 
+pub use aids::{Cutaway, ViewLayout};
+pub use illustrative::RetinaCamera;
 pub use montage::{slice_layout, Layout, SEPARATOR};
 pub use options::{
-    CompositeMode, CompositeOptions, GivenKeys, OptionError, Projection, DEFAULT_DISTANCE,
-    DEFAULT_STAGE_DISTANCE, MAX_PIXELS,
+    CompositeMode, CompositeOptions, GivenKeys, HiddenEdges, OptionError, Projection,
+    DEFAULT_DISTANCE, DEFAULT_STAGE_DISTANCE, MAX_PIXELS, MAX_TURNTABLE_FRAMES,
 };
+pub use overlay::{PixelEdge, RetinaEdge, MAX_RETINA_DIM};
 
 use crate::{NdError, NdResult};
 use glam::Vec4;
 use montage::{render_slices, render_strip, render_tiles, Tiles};
 use rayon::prelude::*;
 use stages::{project_stage, stage_params};
-use volume::{render_3d, Grid};
+use view::View3;
 
 /// Rays of the volume mode stop when the transmittance falls below this.
 pub const MIN_TRANSMITTANCE: f32 = 1e-4;
@@ -91,6 +98,20 @@ impl Image {
     }
 }
 
+/// What a traced retina gives the compositor beyond its colours and depths (all optional): the
+/// unit N-D normal of each cell's nearest hit (`N` floats per cell, numpy order), its camera,
+/// and the pieces of the scene's feature edges in retina coordinates. The illustrative mode
+/// uses them; the other modes ignore them.
+#[derive(Debug, Clone, Default)]
+pub struct RetinaExtras<'a> {
+    /// `cells · N` floats: the shading normal of each cell (0 on a miss).
+    pub normal: Option<&'a [f32]>,
+    /// The camera that traced the retina (occlusion contours from exact hit points).
+    pub camera: Option<RetinaCamera>,
+    /// Feature-edge pieces to draw (see [`crate::edges::retina_edges`]).
+    pub edges: &'a [RetinaEdge],
+}
+
 /// Composites a retina (premultiplied `rgba`, optional `depth`, numpy-order `shape`) into a
 /// picture. See the [module docs](self) and [`CompositeOptions`].
 pub fn composite(
@@ -99,8 +120,30 @@ pub fn composite(
     shape: &[usize],
     opts: &CompositeOptions,
 ) -> NdResult<Image> {
+    composite_retina(rgba, depth, shape, &RetinaExtras::default(), opts)
+}
+
+/// [`composite`] with the retina's [`RetinaExtras`].
+pub fn composite_retina(
+    rgba: &[f32],
+    depth: Option<&[f32]>,
+    shape: &[usize],
+    extras: &RetinaExtras<'_>,
+    opts: &CompositeOptions,
+) -> NdResult<Image> {
     let cells = check_retina(rgba, depth, shape)?;
+    check_extras(extras, cells, shape.len())?;
     opts.validate_for(shape, depth.is_some())?;
+    let m = shape.len();
+    let (w, h) = opts.size;
+    let bg = opts.background.map(|x| x as f32);
+    if m >= 3 && opts.mode != CompositeMode::Slices {
+        return Ok(Image {
+            width: w,
+            height: h,
+            rgba: View3::new(rgba, depth, shape, extras, cells, opts).picture(opts),
+        });
+    }
     let mut vol = Volume {
         shape: shape.to_vec(),
         cells: prepare(rgba, depth, cells, opts),
@@ -112,12 +155,9 @@ pub fn composite(
         vol = project_stage(&vol, f, d, opts.projection == Projection::Orthographic);
         stage += 1;
     }
-    let (w, h) = opts.size;
-    let bg = opts.background.map(|x| x as f32);
     let rgba = match vol.shape.len() {
         3 => match opts.mode {
-            CompositeMode::Slices => render_slices(&vol, opts, bg),
-            mode => render_3d(&Grid::new(&vol), mode, opts, bg),
+            _ => render_slices(&vol, opts, bg),
         },
         2 => {
             let (rows, cols) = (vol.shape[0], vol.shape[1]);
@@ -138,6 +178,112 @@ pub fn composite(
         height: h,
         rgba,
     })
+}
+
+/// A turntable: `frames` pictures of the retina seen by a compositing camera orbiting it, frame
+/// k from azimuth `opts.azimuth + 360° · k / frames` (motion parallax for the price of one
+/// trace). The retina is prepared once (for the illustrative mode, its cues), so a frame costs
+/// one view. For N ≤ 3, and for the slices mode, every frame is the same picture.
+pub fn composite_turntable(
+    rgba: &[f32],
+    depth: Option<&[f32]>,
+    shape: &[usize],
+    extras: &RetinaExtras<'_>,
+    opts: &CompositeOptions,
+    frames: usize,
+) -> NdResult<Vec<Image>> {
+    if !(1..=MAX_TURNTABLE_FRAMES).contains(&frames) {
+        return Err(NdError::Value {
+            arg: "turntable".into(),
+            message: format!("must be 1 to {MAX_TURNTABLE_FRAMES} frames, got {frames}"),
+        });
+    }
+    let cells = check_retina(rgba, depth, shape)?;
+    check_extras(extras, cells, shape.len())?;
+    opts.validate_for(shape, depth.is_some())?;
+    let (w, h) = opts.size;
+    if shape.len() < 3 || opts.mode == CompositeMode::Slices {
+        let one = composite_retina(rgba, depth, shape, extras, opts)?;
+        return Ok(vec![one; frames]);
+    }
+    let view = View3::new(rgba, depth, shape, extras, cells, opts);
+    Ok((0..frames)
+        .map(|k| {
+            let o = CompositeOptions {
+                azimuth: opts.azimuth + 360.0 * k as f64 / frames as f64,
+                ..opts.clone()
+            };
+            Image {
+                width: w,
+                height: h,
+                rgba: view.picture(&o),
+            }
+        })
+        .collect())
+}
+
+/// The feature-edge pieces the illustrative picture of `opts` draws (one view, whatever
+/// `layout`), in picture pixels (x right, y down) with their N-D depths and visibility: what a
+/// vector drawing of the picture's edges needs (`ndtrace.write_svg`). Empty unless the retina
+/// comes with edges and `opts.edges`.
+pub fn picture_edges(
+    rgba: &[f32],
+    depth: Option<&[f32]>,
+    shape: &[usize],
+    extras: &RetinaExtras<'_>,
+    opts: &CompositeOptions,
+) -> NdResult<Vec<PixelEdge>> {
+    let cells = check_retina(rgba, depth, shape)?;
+    check_extras(extras, cells, shape.len())?;
+    opts.validate_for(shape, depth.is_some())?;
+    if shape.len() < 3 {
+        return Ok(Vec::new());
+    }
+    let o = CompositeOptions {
+        mode: CompositeMode::Illustrative,
+        ..opts.clone()
+    };
+    Ok(View3::new(rgba, depth, shape, extras, cells, &o).pixel_edges(&o))
+}
+
+fn check_extras(extras: &RetinaExtras<'_>, cells: usize, m: usize) -> NdResult<()> {
+    let n = m + 1;
+    if let Some(nrm) = extras.normal {
+        if nrm.len() != cells * n {
+            return Err(NdError::Shape {
+                arg: "normal".into(),
+                expected: format!("{cells} cells × {n} = {} floats", cells * n),
+                got: format!("{} floats", nrm.len()),
+            });
+        }
+    }
+    if let Some(cam) = &extras.camera {
+        if cam.orientation.len() != n * n || !cam.orientation.iter().all(|v| v.is_finite()) {
+            return Err(NdError::Value {
+                arg: "camera".into(),
+                message: format!("expected a finite {n}×{n} orientation"),
+            });
+        }
+        if !(cam.cell > 0.0 && cam.cell.is_finite()) {
+            return Err(NdError::Value {
+                arg: "camera".into(),
+                message: format!("cell size must be positive, got {}", cam.cell),
+            });
+        }
+    }
+    if let Some(e) = extras.edges.iter().position(|e| {
+        e.a[..m]
+            .iter()
+            .chain(&e.b[..m])
+            .chain(&e.depth)
+            .any(|v| !v.is_finite())
+    }) {
+        return Err(NdError::Value {
+            arg: "edges".into(),
+            message: format!("edge {e} has a non-finite coordinate or depth"),
+        });
+    }
+    Ok(())
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -331,3 +477,6 @@ pub(super) fn over(s: [f32; 4], bg: [f32; 3]) -> [f32; 4] {
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod illustrative_tests;

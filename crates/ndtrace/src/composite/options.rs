@@ -18,6 +18,7 @@
 //! ndtrace.composite(retina, mode="slices", size=(800, 600))
 //! ```
 
+use super::aids::{Cutaway, ViewLayout};
 use super::stages::half_lengths;
 use crate::camera::Projection as SceneProjection;
 use crate::NdError;
@@ -40,18 +41,39 @@ pub enum CompositeMode {
     /// and emits its premultiplied colour times (1 − (1 − a)^Δ) / a, so the picture does not
     /// depend on the step (a uniform slab of alpha a and thickness L cells has opacity exactly
     /// 1 − (1 − a)^L). Rays stop once the transmittance falls below 1e-4.
-    #[default]
     Volume,
     /// Maximum intensity projection: each ray shows, unchanged, the cell it crosses whose
     /// premultiplied colour has the largest Rec. 709 luminance (ties: the larger alpha, then
     /// the nearer cell). Cells are crossed exactly (voxel traversal, no interpolation).
     Mip,
-    /// The nearest cell with alpha > 0 that the ray crosses, shown opaque in its own
-    /// (un-premultiplied) colour: crisp cube-shaped cells and silhouettes.
+    /// The nearest point where the trilinearly interpolated alpha reaches ½ (times `opacity`,
+    /// at most 1), found every [`CompositeOptions::step`] cells and refined by bisection, shown
+    /// opaque in the interpolated (un-premultiplied) colour there: a smooth iso-surface of the
+    /// coverage, not a staircase of cells.
     FirstHit,
     /// A montage of the 2D slices of the volume along [`CompositeOptions::axis`]; see
     /// [`slice_layout`](super::slice_layout) for where slice k goes.
     Slices,
+    /// Nearly clear cells in their 4D-lit colour, with opacity where the retina has structure —
+    /// creases between cells whose 4D normals differ, occlusion contours, silhouettes seen
+    /// edge-on — and the objects' feature edges drawn over it, visible ones solid and hidden
+    /// ones dashed (see [`illustrative`](super::illustrative) and [`overlay`](super::overlay)).
+    /// The default: a tesseract reads as a cube inside a cube joined by six frusta.
+    #[default]
+    Illustrative,
+}
+
+/// How the illustrative mode draws the pieces of feature edges hidden in N-D.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HiddenEdges {
+    /// Dashed, thinner and fainter than the visible ones (the default).
+    #[default]
+    Dashed,
+    /// Solid, faint.
+    Faint,
+    /// Not drawn.
+    None,
 }
 
 /// Default camera distance, in half-diagonals of the retina cube.
@@ -60,6 +82,8 @@ pub const DEFAULT_DISTANCE: f64 = 4.0;
 pub const DEFAULT_STAGE_DISTANCE: f64 = 3.0;
 /// Largest number of pixels of a picture.
 pub const MAX_PIXELS: usize = 1 << 28;
+/// Most frames of a turntable.
+pub const MAX_TURNTABLE_FRAMES: usize = 3600;
 
 /// Declares [`CompositeOptions`] from one list of `field: Type = default` entries: the struct,
 /// its [`Default`], [`CompositeOptions::KEYS`] and its serde form (a table with one optional
@@ -147,8 +171,8 @@ composite_options! {
     /// field has a documented default ([`Default`]); [`validate`](Self::validate) and
     /// [`validate_for`](Self::validate_for) state their ranges.
     pub struct CompositeOptions {
-        /// How a 3D volume becomes a picture. Default [`CompositeMode::Volume`].
-        mode: CompositeMode = CompositeMode::Volume,
+        /// How a 3D volume becomes a picture. Default [`CompositeMode::Illustrative`].
+        mode: CompositeMode = CompositeMode::Illustrative,
         /// Degrees; rotation of the eye about the vertical (row) axis. Default 30.
         azimuth: f64 = 30.0,
         /// Degrees; height of the eye above the horizontal plane. Default 20.
@@ -212,6 +236,47 @@ composite_options! {
         /// For [`CompositeMode::Slices`]: draw each slice's index in the top-left corner of its
         /// tile (when the tile is large enough). Default true.
         labels: bool = true,
+        /// For N ≥ 4: the compositing camera looks at the centre of the box of the retina's
+        /// occupied cells (alpha > 0), and `distance` counts in that box's half-diagonals, so
+        /// the object fills the picture whatever the retina's field of view. False: the whole
+        /// retina box. Default true.
+        fit: bool = true,
+        /// For the illustrative mode: neighbouring cells whose unit normals' lines are more
+        /// than this many degrees apart show a crease; also the crease angle of the feature
+        /// edges drawn ([`crate::mesh::feature_edges`]). In [0, 90]. Default 20.
+        crease_angle: f64 = 20.0,
+        /// For the illustrative mode: draw the objects' feature edges over the picture when the
+        /// retina comes with them (a retina traced from a scene). Default true.
+        edges: bool = true,
+        /// Width in pixels of visible edges (hidden ones are 0.6× as wide); 0 picks one that
+        /// reads at the picture's size, max(1, min(W, H)/300). In [0, 64]. Default 0.
+        edge_width: f64 = 0.0,
+        /// Linear RGB of the edges; none (the default) picks near-white on a dark background,
+        /// near-black on a light one. With `depth_cue` > 0 edges are also tinted by their N-D
+        /// depth, warm (near) to cool (far).
+        edge_color: Option<[f64; 3]> = None,
+        /// How pieces of edges hidden in N-D are drawn: `"dashed"` (default), `"faint"` or
+        /// `"none"`.
+        hidden_edges: HiddenEdges = HiddenEdges::Dashed,
+        /// For N ≥ 4: one view (`"single"`, the default), `"sections"` (the view and three
+        /// orthogonal sections through [`section`](Self::section)) or `"stereo"` (a side-by-side
+        /// pair); see [`ViewLayout`].
+        layout: ViewLayout = ViewLayout::Single,
+        /// For the sections layout: the world point (volume centred, longest side spanning
+        /// [−1, 1]; x columns, y up, z slices) the three sections pass through. Default the
+        /// centre.
+        section: [f64; 3] = [0.0; 3],
+        /// For the stereo layout: degrees of azimuth between the two eyes, in [0, 30].
+        /// Default 6.
+        stereo_angle: f64 = 6.0,
+        /// A turntable of this many frames (1 ..= [`MAX_TURNTABLE_FRAMES`]): frame k seen from
+        /// azimuth + 360°·k/frames, the retina traced once; `ndtrace.composite` then returns
+        /// the frames and `-o orbit.gif` animates them. 0 (the default): one picture.
+        turntable: usize = 0,
+        /// For N ≥ 4: a region of the 3D volume removed so its inside shows: a table with
+        /// `shape = "half_space"` (`normal`, `offset`), `"sphere"` (`center`, `radius`) or
+        /// `"box"` (`min`, `max`), in world coordinates (see [`Cutaway`]). Default none.
+        cutaway: Option<Cutaway> = None,
     }
 }
 
@@ -339,8 +404,62 @@ impl CompositeOptions {
             stages,
             strip_height,
             labels: _,
+            fit: _,
+            crease_angle,
+            edges: _,
+            edge_width,
+            edge_color,
+            hidden_edges: _,
+            layout: _,
+            section,
+            stereo_angle,
+            cutaway,
+            turntable,
             given: _,
         } = self;
+        for (k, &v) in section.iter().enumerate() {
+            finite(&format!("section[{k}]"), v)?;
+        }
+        if !(0.0..=30.0).contains(&finite("stereo_angle", *stereo_angle)?) {
+            return Err(bad(
+                "stereo_angle",
+                format!("must be in [0, 30] degrees, got {stereo_angle}"),
+            ));
+        }
+        if let Some(c) = cutaway {
+            c.validate("cutaway")
+                .map_err(|(key, message)| bad(&key, message))?;
+        }
+        if *turntable > MAX_TURNTABLE_FRAMES {
+            return Err(bad(
+                "turntable",
+                format!(
+                    "must be 0 (one picture) to {MAX_TURNTABLE_FRAMES} frames, got {turntable}"
+                ),
+            ));
+        }
+        if !(0.0..=90.0).contains(&finite("crease_angle", *crease_angle)?) {
+            return Err(bad(
+                "crease_angle",
+                format!("must be in [0, 90] degrees, got {crease_angle}"),
+            ));
+        }
+        if !(0.0..=64.0).contains(&finite("edge_width", *edge_width)?) {
+            return Err(bad(
+                "edge_width",
+                format!("must be in [0, 64] pixels (0: automatic), got {edge_width}"),
+            ));
+        }
+        if let Some(c) = edge_color {
+            for (k, &v) in c.iter().enumerate() {
+                if !(finite(&format!("edge_color[{k}]"), v)? >= 0.0) {
+                    return Err(bad(
+                        &format!("edge_color[{k}]"),
+                        format!("must be ≥ 0, got {v}"),
+                    ));
+                }
+            }
+        }
         if *strip_height == 0 {
             return Err(bad("strip_height", "must be at least 1"));
         }
@@ -466,6 +585,21 @@ background = [0.1, 0.2, 0.3]
 stages = [[2.0, 4.0]]
 strip_height = 7
 labels = false
+fit = false
+crease_angle = 35.0
+edges = false
+edge_width = 3.5
+edge_color = [0.5, 0.25, 1.0]
+hidden_edges = "faint"
+layout = "stereo"
+section = [0.5, -0.25, 0.0]
+stereo_angle = 4.0
+turntable = 12
+
+[cutaway]
+shape = "sphere"
+center = [0.0, 0.25, 0.0]
+radius = 0.5
 "#;
 
     #[test]
@@ -487,14 +621,31 @@ labels = false
             stages: vec![(2.0, 4.0)],
             strip_height: 7,
             labels: false,
+            fit: false,
+            crease_angle: 35.0,
+            edges: false,
+            edge_width: 3.5,
+            edge_color: Some([0.5, 0.25, 1.0]),
+            hidden_edges: HiddenEdges::Faint,
+            layout: ViewLayout::Stereo,
+            section: [0.5, -0.25, 0.0],
+            stereo_angle: 4.0,
+            turntable: 12,
+            cutaway: Some(Cutaway::Sphere {
+                center: [0.0, 0.25, 0.0],
+                radius: 0.5,
+            }),
             given: GivenKeys::ALL,
         };
         assert_eq!(o, expect);
         assert_eq!(toml::to_string(&o).unwrap(), EVERY_KEY);
-        let keys: Vec<&str> = EVERY_KEY
+        // One line per key, the table-valued `cutaway` last as its own section.
+        let mut keys: Vec<&str> = EVERY_KEY
             .lines()
+            .take_while(|l| !l.is_empty())
             .map(|l| &l[..l.find(' ').unwrap()])
             .collect();
+        keys.push("cutaway");
         assert_eq!(keys, CompositeOptions::KEYS);
         assert!(CompositeOptions::KEYS.iter().all(|k| o.given.has(k)));
     }
@@ -522,9 +673,13 @@ labels = false
         );
         assert_eq!(toml::to_string(&CompositeOptions::default()).unwrap(), "");
         let every = toml::to_string(&CompositeOptions::default().with_every_key()).unwrap();
-        assert_eq!(every.lines().count(), CompositeOptions::KEYS.len());
+        // TOML has no null: `edge_color` and `cutaway`, None by default, are left out.
+        assert_eq!(every.lines().count(), CompositeOptions::KEYS.len() - 2);
+        // (The keys left out are not given when read back.)
         assert_eq!(
-            toml::from_str::<CompositeOptions>(&every).unwrap(),
+            toml::from_str::<CompositeOptions>(&every)
+                .unwrap()
+                .with_every_key(),
             CompositeOptions::default().with_every_key()
         );
     }
@@ -701,7 +856,7 @@ opacity = 0.6
             scene_err(&text),
             format!(
                 "scene.toml:{line}:{col}: composite.mode: unknown mode \"mpi\" (expected one of \
-                 \"volume\", \"mip\", \"first_hit\", \"slices\")"
+                 \"volume\", \"mip\", \"first_hit\", \"slices\", \"illustrative\")"
             )
         );
         // A 5D scene's retina has one stage, whose eye must be outside the box.

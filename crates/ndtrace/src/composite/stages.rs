@@ -21,6 +21,22 @@ pub(super) fn stage_params(shape: &[usize], given: Option<(f64, f64)>) -> (f64, 
     })
 }
 
+/// Where the stage collapsing the leading axis of `shape` puts the point `xi` (continuous
+/// numpy-order cell coordinates of its k-D input: cell i of an axis spans [i, i + 1]): the
+/// (k−1)-D output coordinates, by the stage's x_j ↦ x_j · f / (d + x_k) (or x_j for
+/// orthographic), the map whose inverse [`project_stage`] samples along.
+pub(super) fn stage_point(shape: &[usize], f: f64, d: f64, ortho: bool, xi: &[f64]) -> Vec<f64> {
+    let c = 2.0 / *shape.iter().max().unwrap() as f64;
+    let xk = (xi[0] - shape[0] as f64 / 2.0) * c;
+    let scale = if ortho { 1.0 } else { f / (d + xk) };
+    (1..shape.len())
+        .map(|a| {
+            let x = (xi[a] - shape[a] as f64 / 2.0) * c;
+            x * scale / c + shape[a] as f64 / 2.0
+        })
+        .collect()
+}
+
 const STAGE_CHUNK: usize = 1024;
 
 /// One k-D → (k−1)-D emission–absorption stage along the leading axis (see

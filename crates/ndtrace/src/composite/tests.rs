@@ -1,5 +1,6 @@
 //! Tests of the compositing: analytic pictures from the documented conventions.
 
+use super::volume::{render_3d, Grid};
 use super::*;
 use crate::testutil::rng;
 use crate::NdError;
@@ -21,6 +22,16 @@ fn retina(shape: &[usize], f: impl Fn(&[usize]) -> [f32; 4]) -> Vec<f32> {
     out
 }
 
+/// The options these tests were written for: the volume mode framing the whole retina box
+/// (the defaults are the illustrative mode and `fit`, tested in `illustrative_tests`).
+fn legacy() -> CompositeOptions {
+    CompositeOptions {
+        mode: CompositeMode::Volume,
+        fit: false,
+        ..Default::default()
+    }
+}
+
 fn ortho(mode: CompositeMode, az: f64, el: f64, size: (usize, usize)) -> CompositeOptions {
     CompositeOptions {
         mode,
@@ -28,7 +39,7 @@ fn ortho(mode: CompositeMode, az: f64, el: f64, size: (usize, usize)) -> Composi
         elevation: el,
         projection: Projection::Orthographic,
         size,
-        ..Default::default()
+        ..legacy()
     }
 }
 
@@ -76,7 +87,9 @@ fn opaque_cell_face_on_covers_exactly_its_pixels() {
     });
     let size = (61, 50);
     let bg = [0.1, 0.2, 0.3];
-    for mode in [CompositeMode::FirstHit, CompositeMode::Mip] {
+    // (First-hit shows the smooth surface where the interpolated coverage reaches ½, not cell
+    // footprints: tests/test_pictures.py checks it on a ball.)
+    for mode in [CompositeMode::Mip] {
         let mut o = ortho(mode, 0.0, 0.0, size);
         o.background = bg;
         let img = composite(&rgba, None, &shape, &o).unwrap();
@@ -173,7 +186,7 @@ fn uniform_slab_matches_the_closed_form() {
                     projection,
                     size: (65, 65),
                     step,
-                    ..Default::default()
+                    ..legacy()
                 };
                 let p = composite(&rgba, None, &shape, &o).unwrap().pixel(32, 32);
                 let expect = 1.0 - (1.0 - a as f64).powf(central_path(n, az, el));
@@ -307,7 +320,7 @@ fn first_hit_shows_the_nearest_cell() {
                 elevation: 0.0,
                 projection,
                 size: (31, 31),
-                ..Default::default()
+                ..legacy()
             };
             let p = composite(&rgba, None, &shape, &o).unwrap().pixel(15, 15);
             for ch in 0..4 {
@@ -323,7 +336,7 @@ fn first_hit_shows_the_nearest_cell() {
         azimuth: 0.0,
         elevation: 0.0,
         size: (31, 31),
-        ..Default::default()
+        ..legacy()
     };
     let p = composite(&rgba, None, &shape, &o).unwrap().pixel(15, 15);
     assert!(p[3] > 0.85 && p[0] > 3.0 * p[2], "{p:?}");
@@ -622,7 +635,7 @@ fn empty_space_skipping_changes_nothing() {
             [0.0; 4]
         }
     });
-    let cells = prepare(&rgba, None, 37 * 29 * 45, &CompositeOptions::default());
+    let cells = prepare(&rgba, None, 37 * 29 * 45, &legacy());
     let vol = Volume {
         shape: shape.to_vec(),
         cells,
@@ -658,7 +671,14 @@ fn empty_space_skipping_changes_nothing() {
             projection,
             size: (90, 70),
             step: 0.37,
-            ..Default::default()
+            // First-hit's surface is at coverage ½ · min(opacity, 1) (the cells, prepared above,
+            // have alpha ½): put it at ¼ so the balls show.
+            opacity: if mode == CompositeMode::FirstHit {
+                0.5
+            } else {
+                1.0
+            },
+            ..legacy()
         };
         let a = render_3d(&grid, mode, &o, [0.0; 3]);
         let b = render_3d(&full, mode, &o, [0.0; 3]);
@@ -697,7 +717,7 @@ fn output_is_identical_whatever_the_thread_count() {
                     elevation: -15.0,
                     opacity: 0.3,
                     size: (70, 50),
-                    ..Default::default()
+                    ..legacy()
                 };
                 outs.push(composite(&rgba, None, &shape, &o).unwrap());
                 outs.push(composite(&rgba5, None, &shape5, &o).unwrap());
@@ -719,7 +739,7 @@ fn depth_cue_tints_near_warm_and_far_cool() {
         mode: CompositeMode::FirstHit,
         depth_cue: 1.0,
         size: (3, 1),
-        ..Default::default()
+        ..legacy()
     };
     // Through the 2D path (N = 3 would need 2 axes): use the prepared cells directly.
     let cells = prepare(&rgba, Some(&depth), 3, &o);
@@ -760,7 +780,7 @@ fn two_d_and_one_d_retinas() {
     let o = CompositeOptions {
         size: (4, 3),
         background: bg,
-        ..Default::default()
+        ..legacy()
     };
     let img = composite(&rgba, None, &shape, &o).unwrap();
     for r in 0..3 {
@@ -787,7 +807,7 @@ fn two_d_and_one_d_retinas() {
     let o = CompositeOptions {
         size: (40, 10),
         strip_height: 4,
-        ..Default::default()
+        ..legacy()
     };
     let img = composite(&rgba, None, &[20], &o).unwrap();
     for y in 0..10 {
@@ -806,7 +826,7 @@ fn two_d_and_one_d_retinas() {
 fn bad_input_is_a_clear_error() {
     let shape = [2usize, 2, 2];
     let rgba = vec![0f32; 32];
-    let ok = CompositeOptions::default();
+    let ok = legacy();
     assert!(composite(&rgba, None, &shape, &ok).is_ok());
     let arg_of = |e: NdError| match e {
         NdError::Value { arg, message } => (arg, message),
@@ -829,7 +849,7 @@ fn bad_input_is_a_clear_error() {
     assert!(a == "shape" && m.contains("1 to 7"), "{m}");
     assert_eq!(err(&[], None, &[2, 0, 2], &ok).0, "shape");
     let with = |f: &dyn Fn(&mut CompositeOptions)| {
-        let mut o = CompositeOptions::default();
+        let mut o = legacy();
         f(&mut o);
         err(&rgba, None, &shape, &o)
     };
@@ -857,7 +877,7 @@ fn bad_input_is_a_clear_error() {
     let o = CompositeOptions {
         distance: 0.5,
         projection: Projection::Orthographic,
-        ..Default::default()
+        ..legacy()
     };
     assert!(composite(&rgba, None, &shape, &o).is_ok());
     // Stages: N − 4 pairs, f > 0, d beyond the box.
@@ -865,24 +885,24 @@ fn bad_input_is_a_clear_error() {
     let rgba5 = vec![0f32; 64];
     let o = CompositeOptions {
         stages: vec![(1.0, 3.0), (1.0, 3.0)],
-        ..Default::default()
+        ..legacy()
     };
     assert_eq!(err(&rgba5, None, &shape5, &o).0, "stages");
     let o = CompositeOptions {
         stages: vec![(1.0, 0.5)],
-        ..Default::default()
+        ..legacy()
     };
     assert_eq!(err(&rgba5, None, &shape5, &o).0, "stages[0]");
     let o = CompositeOptions {
         stages: vec![(2.0, 3.0)],
-        ..Default::default()
+        ..legacy()
     };
     assert!(composite(&rgba5, None, &shape5, &o).is_ok());
     // Stage values must be finite even where orthographic stages do not use them.
     let o = CompositeOptions {
         stages: vec![(f64::NAN, 3.0)],
         projection: Projection::Orthographic,
-        ..Default::default()
+        ..legacy()
     };
     assert_eq!(err(&rgba5, None, &shape5, &o).0, "stages[0]");
 }

@@ -26,3 +26,6 @@ impl<const N: usize> Mesh<N> {
         std::array::from_fn(|k| self.vertices[idx[k] as usize])
     }
 }
+
+pub mod features;
+pub use features::feature_edges;

@@ -1,0 +1,371 @@
+//! The 3D views of a retina (N ≥ 4): the volume (or the illustrative cues) prepared once, then
+//! seen through any number of compositing cameras — one picture, a stereo pair, the sections
+//! layout, the frames of a turntable — with the feature edges drawn over each view.
+
+use super::aids::{cut, world_of, Cutaway, ViewLayout};
+use super::illustrative::{self, Cues3};
+use super::montage::{render_tiles, Tiles};
+use super::overlay::{self, PixelEdge, RetinaEdge};
+use super::stages::{project_stage, stage_params, stage_point};
+use super::volume::{occupied_box, render_view, Camera3, Grid};
+use super::{prepare, CompositeMode, CompositeOptions, Projection, RetinaExtras, Volume};
+use glam::DVec3;
+
+/// What the views are rendered from.
+enum Source {
+    /// A premultiplied volume (volume, mip and first-hit modes; the illustrative mode for N ≥ 5,
+    /// classified before the stages).
+    Grid(Grid),
+    /// The illustrative cues of a 3D retina, classified per view.
+    Cues(Cues3),
+}
+
+/// A piece of a feature edge in the 3D volume's cell coordinates.
+struct Edge3 {
+    a: DVec3,
+    b: DVec3,
+    depth: [f64; 2],
+    visible: bool,
+}
+
+/// A retina of m ≥ 3 axes made ready for 3D views.
+pub(super) struct View3 {
+    source: Source,
+    /// Cells of the 3D volume (column, row, slice).
+    n: [usize; 3],
+    /// The box of the occupied cells, when `fit`.
+    frame: Option<([f64; 3], [f64; 3])>,
+    /// For the sections layout: the premultiplied 3D volume (before any cutaway).
+    sections: Option<Volume>,
+    edges: Vec<Edge3>,
+    /// The mode the views are marched in.
+    mode: CompositeMode,
+}
+
+impl View3 {
+    pub(super) fn new(
+        rgba: &[f32],
+        depth: Option<&[f32]>,
+        shape: &[usize],
+        extras: &RetinaExtras<'_>,
+        cells: usize,
+        opts: &CompositeOptions,
+    ) -> Self {
+        let ortho = opts.projection == Projection::Orthographic;
+        let down_to_3d = |mut vol: Volume| {
+            let mut stage = 0;
+            while vol.shape.len() > 3 {
+                let (f, d) = stage_params(&vol.shape, opts.stages.get(stage).copied());
+                vol = project_stage(&vol, f, d, ortho);
+                stage += 1;
+            }
+            vol
+        };
+        let n = [
+            shape[shape.len() - 1],
+            shape[shape.len() - 2],
+            shape[shape.len() - 3],
+        ];
+        let plain = || {
+            down_to_3d(Volume {
+                shape: shape.to_vec(),
+                cells: prepare(rgba, depth, cells, opts),
+            })
+        };
+        let sections = (opts.layout == ViewLayout::Sections).then(plain);
+        let illustrative = opts.mode == CompositeMode::Illustrative;
+        // The framing box: the occupied cells before any cutaway, so a cut does not move the
+        // object in the picture.
+        let mut frame = None;
+        let source = if illustrative {
+            // The cells' colours with the depth cue (coverage unscaled: `opacity` scales the
+            // interior).
+            let unit = CompositeOptions {
+                opacity: 1.0,
+                ..opts.clone()
+            };
+            let mut prepared = prepare(rgba, depth, cells, &unit);
+            if shape.len() == 3 {
+                frame = box_of(shape, &prepared);
+                if let Some(c) = &opts.cutaway {
+                    cut(&mut prepared, shape, c);
+                }
+            }
+            let prepared: Vec<f32> = prepared.into_iter().flatten().collect();
+            let hits: Vec<f32>;
+            let depth = match depth {
+                Some(d) => d,
+                None => {
+                    hits = (0..cells)
+                        .map(|i| {
+                            if rgba[i * 4 + 3] > 0.0 {
+                                1.0
+                            } else {
+                                f32::INFINITY
+                            }
+                        })
+                        .collect();
+                    &hits
+                }
+            };
+            let camera = extras.camera.as_ref();
+            if shape.len() == 3 {
+                Source::Cues(Cues3::new(
+                    &prepared,
+                    depth,
+                    extras.normal,
+                    shape,
+                    camera,
+                    opts,
+                ))
+            } else {
+                let classified =
+                    illustrative::classify(&prepared, depth, extras.normal, shape, camera, opts);
+                let mut vol = down_to_3d(Volume {
+                    shape: shape.to_vec(),
+                    cells: classified,
+                });
+                frame = box_of(&vol.shape, &vol.cells);
+                if let Some(c) = &opts.cutaway {
+                    cut(&mut vol.cells, &vol.shape, c);
+                }
+                Source::Grid(Grid::new(&vol))
+            }
+        } else {
+            let mut vol = plain();
+            frame = box_of(&vol.shape, &vol.cells);
+            if let Some(c) = &opts.cutaway {
+                cut(&mut vol.cells, &vol.shape, c);
+            }
+            Source::Grid(Grid::new(&vol))
+        };
+        let frame = if opts.fit { frame } else { None };
+        let edges = if illustrative && opts.edges {
+            edges_3d(extras.edges, shape, n, opts)
+        } else {
+            Vec::new()
+        };
+        View3 {
+            source,
+            n,
+            frame,
+            sections,
+            edges,
+            mode: if illustrative {
+                CompositeMode::Volume
+            } else {
+                opts.mode
+            },
+        }
+    }
+
+    /// The picture of `opts` (its size, azimuth and layout).
+    pub(super) fn picture(&self, opts: &CompositeOptions) -> Vec<f32> {
+        let (w, h) = opts.size;
+        let bg = opts.background.map(|x| x as f32);
+        let sized = |w: usize, h: usize, azimuth: f64| CompositeOptions {
+            size: (w.max(1), h.max(1)),
+            azimuth,
+            ..opts.clone()
+        };
+        match opts.layout {
+            ViewLayout::Single => self.view(opts),
+            ViewLayout::Stereo => {
+                let (wl, wr) = (w / 2, w - w / 2);
+                let half = opts.stereo_angle / 2.0;
+                let left = self.view(&sized(wl, h, opts.azimuth - half));
+                let right = self.view(&sized(wr, h, opts.azimuth + half));
+                let mut img = vec![0f32; w * h * 4];
+                paste(&mut img, w, &left, wl.max(1), 0, 0, wl, h);
+                paste(&mut img, w, &right, wr, wl, 0, wr, h);
+                img
+            }
+            ViewLayout::Sections => {
+                let (wl, wr, ht, hb) = (w / 2, w - w / 2, h / 2, h - h / 2);
+                let mut img = vec![0f32; w * h * 4];
+                let view = self.view(&sized(wl, ht, opts.azimuth));
+                paste(&mut img, w, &view, wl.max(1), 0, 0, wl, ht);
+                let vol = self.sections.as_ref().expect("sections volume");
+                for (k, (x0, y0, qw, qh)) in [(wl, 0, wr, ht), (0, ht, wl, hb), (wl, ht, wr, hb)]
+                    .into_iter()
+                    .enumerate()
+                {
+                    if qw == 0 || qh == 0 {
+                        continue;
+                    }
+                    let tile = section(vol, opts.section, k, qw, qh, bg);
+                    paste(&mut img, w, &tile, qw, x0, y0, qw, qh);
+                }
+                img
+            }
+        }
+    }
+
+    /// The feature-edge pieces of the single view of `opts`, in its picture's pixels.
+    pub(super) fn pixel_edges(&self, opts: &CompositeOptions) -> Vec<PixelEdge> {
+        project(&self.edges, &Camera3::new(self.n, self.frame, opts))
+    }
+
+    /// One view at `opts.size`.
+    fn view(&self, opts: &CompositeOptions) -> Vec<f32> {
+        let bg = opts.background.map(|x| x as f32);
+        let cam = Camera3::new(self.n, self.frame, opts);
+        let classified;
+        let grid = match &self.source {
+            Source::Grid(g) => g,
+            Source::Cues(c) => {
+                classified = Grid::new(&c.classify(&cam));
+                &classified
+            }
+        };
+        let (mut img, half) = render_view(grid, &cam, self.mode, opts, bg, !self.edges.is_empty());
+        if !self.edges.is_empty() {
+            let pixels = project(&self.edges, &cam);
+            overlay::draw(&mut img, opts.size.0, &pixels, half.as_deref(), opts);
+        }
+        img
+    }
+}
+
+/// The box, in cell coordinates, of the cells with alpha > 0 of a 3D volume in numpy order.
+fn box_of(shape: &[usize], cells: &[[f32; 4]]) -> Option<([f64; 3], [f64; 3])> {
+    let (nx, ny) = (shape[2], shape[1]);
+    occupied_box([nx, ny, shape[0]], |x, y, z| {
+        cells[x + nx * (y + ny * z)][3]
+    })
+}
+
+/// Copies a `qw` × `qh` block from `src` (`src_w` wide) into `dst` (`w` wide) at (x0, y0).
+#[allow(clippy::too_many_arguments)]
+fn paste(
+    dst: &mut [f32],
+    w: usize,
+    src: &[f32],
+    src_w: usize,
+    x0: usize,
+    y0: usize,
+    qw: usize,
+    qh: usize,
+) {
+    for y in 0..qh {
+        let s = &src[y * src_w * 4..][..qw * 4];
+        dst[((y0 + y) * w + x0) * 4..][..qw * 4].copy_from_slice(s);
+    }
+}
+
+/// Section `k` (0: across z, 1: across x, 2: across y; see [`ViewLayout::Sections`]) of the
+/// volume through the world point `at`, scaled to fit `w` × `h` over `bg`.
+fn section(vol: &Volume, at: [f64; 3], k: usize, w: usize, h: usize, bg: [f32; 3]) -> Vec<f32> {
+    let [nz, ny, nx] = [vol.shape[0], vol.shape[1], vol.shape[2]];
+    let c = 2.0 / nx.max(ny).max(nz) as f64;
+    let index = |v: f64, r: usize| ((v / c).floor().max(0.0) as usize).min(r - 1);
+    let x0 = index(at[0] + nx as f64 * c / 2.0, nx);
+    let y0 = index(ny as f64 * c / 2.0 - at[1], ny);
+    let z0 = index(at[2] + nz as f64 * c / 2.0, nz);
+    let idx = move |x: usize, y: usize, z: usize| x + nx * (y + ny * z);
+    let (tw, th) = match k {
+        0 => (nx, ny),
+        1 => (nz, ny),
+        _ => (nx, nz),
+    };
+    let tiles = Tiles {
+        cells: &vol.cells,
+        tw,
+        th,
+        count: 1,
+        gap: 0,
+        labels: false,
+    };
+    render_tiles(w, h, &tiles, bg, move |_, u, v| match k {
+        0 => idx(u, v, z0),
+        1 => idx(x0, v, u),
+        _ => idx(u, y0, v),
+    })
+}
+
+/// The feature-edge pieces mapped from retina coordinates through the stages into the 3D
+/// volume's cell coordinates, with the parts inside the cutaway removed.
+fn edges_3d(
+    edges: &[RetinaEdge],
+    shape: &[usize],
+    n: [usize; 3],
+    opts: &CompositeOptions,
+) -> Vec<Edge3> {
+    let ortho = opts.projection == Projection::Orthographic;
+    let to_3d = |xi: &[f64]| -> DVec3 {
+        let mut p = xi[..shape.len()].to_vec();
+        let mut sh = shape.to_vec();
+        let mut stage = 0;
+        while sh.len() > 3 {
+            let (f, d) = stage_params(&sh, opts.stages.get(stage).copied());
+            p = stage_point(&sh, f, d, ortho, &p);
+            sh.remove(0);
+            stage += 1;
+        }
+        // numpy order (slice, row, column) → cell coordinates (column, row, slice).
+        DVec3::new(p[2], p[1], p[0])
+    };
+    let mut out = Vec::with_capacity(edges.len());
+    for e in edges {
+        let (a, b) = (to_3d(&e.a), to_3d(&e.b));
+        let piece = |t0: f64, t1: f64| Edge3 {
+            a: a + (b - a) * t0,
+            b: a + (b - a) * t1,
+            depth: [
+                e.depth[0] + (e.depth[1] - e.depth[0]) * t0,
+                e.depth[0] + (e.depth[1] - e.depth[0]) * t1,
+            ],
+            visible: e.visible,
+        };
+        match opts
+            .cutaway
+            .as_ref()
+            .and_then(|c: &Cutaway| c.inside(world_of(n, a), world_of(n, b)))
+        {
+            None => out.push(piece(0.0, 1.0)),
+            Some((t0, t1)) => {
+                if t0 > 0.0 {
+                    out.push(piece(0.0, t0));
+                }
+                if t1 < 1.0 {
+                    out.push(piece(t1, 1.0));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The pieces projected to the picture, clipped to the part in front of a perspective eye.
+fn project(edges: &[Edge3], cam: &Camera3) -> Vec<PixelEdge> {
+    let near = cam.near();
+    edges
+        .iter()
+        .filter_map(|e| {
+            let (mut a, mut b) = (e.a, e.b);
+            let [mut da, mut db] = e.depth;
+            let (za, zb) = (cam.view_distance(a), cam.view_distance(b));
+            if za < near && zb < near {
+                return None;
+            }
+            if za < near || zb < near {
+                let t = (near - za) / (zb - za);
+                let q = a + (b - a) * t;
+                let dq = da + (db - da) * t;
+                if za < near {
+                    (a, da) = (q, dq);
+                } else {
+                    (b, db) = (q, dq);
+                }
+            }
+            let (pa, za) = cam.project(a)?;
+            let (pb, zb) = cam.project(b)?;
+            Some(PixelEdge {
+                p: [pa, pb],
+                z: [za, zb],
+                depth: [da, db],
+                visible: e.visible,
+            })
+        })
+        .collect()
+}

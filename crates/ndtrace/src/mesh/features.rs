@@ -1,0 +1,302 @@
+//! Feature edges: the 1-dimensional edges of a mesh's polytope structure.
+//!
+//! A mesh tessellates an (N−1)-manifold into (N−1)-simplices, but the *polytope* it describes
+//! has coarser faces: a tesseract's boundary is 48 tetrahedra, its structure 8 cubes, 24
+//! squares, 32 edges. Hollasch's and the course's wireframe pictures draw those 32 edges, not
+//! the 120 edges of the tetrahedra. This module recovers them from the simplices alone:
+//!
+//! 1. **Creases** (faces of dimension N−2, the ridges): a ridge is a crease if two simplices
+//!    sharing it have unit normals (eq. 6) more than `angle` apart — comparing the normals'
+//!    *lines*, |n̂_a · n̂_b| < cos(angle), so the orientation of the input does not matter — or
+//!    if only one simplex has it (a boundary of an open mesh).
+//! 2. **Down the face dimensions**: a face of dimension m < N−2 is a feature face if the feature
+//!    faces of dimension m+1 containing it do not all lie in one (m+1)-flat. Two (m+1)-faces
+//!    through an m-face G lie in one flat exactly when their directions away from G (the part
+//!    of the opposite vertex orthogonal to G's affine span) are parallel or opposite, so again
+//!    lines are compared with the same `angle`.
+//! 3. The feature faces of dimension 1 are the feature edges. For N = 3 the creases are the
+//!    edges themselves; for N = 2 every non-degenerate segment is an edge.
+//!
+//! Input that real tools produce is handled: vertices with bit-identical coordinates are welded
+//! first (a mesh written face by face), and zero-volume simplices (Qhull's triangulated facets
+//! contain some, to keep a conforming triangulation where two neighbouring facets were split
+//! differently) glue their ridges together: every simplex that shares any ridge with a
+//! zero-volume simplex becomes a neighbour of the others across it, so the zero-volume simplex
+//! neither hides a crease nor invents a boundary.
+
+use crate::linalg::{dot, norm, scale, sub, Vector};
+use crate::NdResult;
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// Largest number of vertices of a face key (a ridge of an 8-D mesh has 7).
+const KEY: usize = 8;
+/// A face as its sorted vertex ids, padded with `u32::MAX`.
+type Key = [u32; KEY];
+/// Relative volume below which a simplex counts as having none (looser than the tracer's
+/// tolerance: the zero-volume simplices of a Qhull triangulation come out of floating-point
+/// arithmetic with relative volumes around 1e-15 … 1e-10).
+pub const FLAT_TOLERANCE: f64 = 1e-9;
+
+/// The feature edges of the mesh `(vertices, simplices)` (every simplex N vertex ids), as
+/// sorted, deduplicated vertex pairs `[i, j]` with i < j (ids refer to `vertices`; of vertices
+/// welded for having the same coordinates, the smallest id is used). See the module docs for
+/// the definition; `angle_degrees` is the crease angle (in [0, 90]).
+pub fn feature_edges<const N: usize>(
+    vertices: &[Vector<N>],
+    simplices: &[[u32; N]],
+    angle_degrees: f64,
+) -> NdResult<Vec<[u32; 2]>> {
+    if !(0.0..=90.0).contains(&angle_degrees) {
+        return Err(crate::NdError::Value {
+            arg: "angle".into(),
+            message: format!("must be in [0, 90] degrees, got {angle_degrees}"),
+        });
+    }
+    for (s, simplex) in simplices.iter().enumerate() {
+        if let Some(&bad) = simplex.iter().find(|&&v| v as usize >= vertices.len()) {
+            return Err(crate::NdError::Value {
+                arg: "simplices".into(),
+                message: format!(
+                    "simplex {s} names vertex {bad}, but there are {} vertices",
+                    vertices.len()
+                ),
+            });
+        }
+    }
+    if let Some(v) = vertices
+        .iter()
+        .position(|v| v.iter().any(|x| !x.is_finite()))
+    {
+        return Err(crate::NdError::Value {
+            arg: "vertices".into(),
+            message: format!("vertex {v} is not finite: {:?}", vertices[v]),
+        });
+    }
+    let cos_angle = angle_degrees.to_radians().cos();
+    let weld = weld(vertices);
+    let simplices: Vec<[u32; N]> = simplices
+        .iter()
+        .map(|s| std::array::from_fn(|k| weld[s[k] as usize]))
+        .collect();
+    if N == 2 {
+        let mut out: Vec<[u32; 2]> = simplices
+            .iter()
+            .filter(|s| s[0] != s[1])
+            .map(|s| [s[0].min(s[1]), s[0].max(s[1])])
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        return Ok(out);
+    }
+    let normals: Vec<Option<Vector<N>>> = simplices
+        .par_iter()
+        .map(|s| {
+            let pts: [Vector<N>; N] = std::array::from_fn(|k| vertices[s[k] as usize]);
+            unit_normal(&pts)
+        })
+        .collect();
+    let mut faces = creases(&simplices, &normals, cos_angle);
+    // Down the face dimensions: faces of `m + 1` vertices from those of `m + 2`.
+    for m in (2..N - 1).rev() {
+        faces = lower_features(vertices, &faces, m, cos_angle);
+    }
+    let mut out: Vec<[u32; 2]> = faces.iter().map(|k| [k[0], k[1]]).collect();
+    out.sort_unstable();
+    out.dedup();
+    Ok(out)
+}
+
+/// For each vertex, the smallest id of a vertex with the same coordinates (−0 = +0).
+fn weld<const N: usize>(vertices: &[Vector<N>]) -> Vec<u32> {
+    let mut first: HashMap<[u64; N], u32> = HashMap::with_capacity(vertices.len());
+    vertices
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let bits: [u64; N] = std::array::from_fn(|k| (v[k] + 0.0).to_bits());
+            *first.entry(bits).or_insert(i as u32)
+        })
+        .collect()
+}
+
+/// The unit normal (direction of eq. 6) of an (N−1)-simplex, or `None` when its relative
+/// volume `|cross(unit edges)|` is at most [`FLAT_TOLERANCE`] (repeated ids included).
+fn unit_normal<const N: usize>(points: &[Vector<N>; N]) -> Option<Vector<N>> {
+    let mut edges = [[0.0; N]; N];
+    for k in 1..N {
+        let e = sub(&points[k], &points[0]);
+        let l = norm(&e);
+        if !(l > 0.0) {
+            return None;
+        }
+        edges[k - 1] = scale(&e, 1.0 / l);
+    }
+    let n = crate::geometry::generalized_cross(&edges[..N - 1]);
+    let l = norm(&n);
+    (l > FLAT_TOLERANCE).then(|| scale(&n, 1.0 / l))
+}
+
+/// `ids` sorted into a padded key (its first `ids.len()` slots).
+fn key_of(ids: impl Iterator<Item = u32>) -> Key {
+    let mut k = [u32::MAX; KEY];
+    for (slot, id) in ids.enumerate() {
+        k[slot] = id;
+    }
+    k.sort_unstable();
+    k
+}
+
+/// Whether a key of `len` vertices names `len` distinct vertices.
+fn distinct(k: &Key, len: usize) -> bool {
+    k[..len].windows(2).all(|w| w[0] != w[1])
+}
+
+/// Union–find with path halving.
+fn find(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        parent[x as usize] = parent[parent[x as usize] as usize];
+        x = parent[x as usize];
+    }
+    x
+}
+
+/// Step 1: the crease ridges (keys of N−1 vertices).
+fn creases<const N: usize>(
+    simplices: &[[u32; N]],
+    normals: &[Option<Vector<N>>],
+    cos_angle: f64,
+) -> Vec<Key> {
+    // Every (ridge, simplex) incidence, grouped by ridge.
+    let mut inc: Vec<(Key, u32)> = simplices
+        .par_iter()
+        .enumerate()
+        .flat_map_iter(|(s, simplex)| {
+            (0..N).filter_map(move |skip| {
+                let k = key_of((0..N).filter(|&j| j != skip).map(|j| simplex[j]));
+                distinct(&k, N - 1).then_some((k, s as u32))
+            })
+        })
+        .collect();
+    inc.par_sort_unstable();
+    let mut ridges: Vec<Key> = Vec::new();
+    let mut ridge_of = Vec::with_capacity(inc.len());
+    for (k, _) in &inc {
+        if ridges.last() != Some(k) {
+            ridges.push(*k);
+        }
+        ridge_of.push(ridges.len() as u32 - 1);
+    }
+    // Zero-volume simplices glue their ridges into one class.
+    let mut parent: Vec<u32> = (0..ridges.len() as u32).collect();
+    let mut first_ridge: HashMap<u32, u32> = HashMap::new();
+    for (i, &(_, s)) in inc.iter().enumerate() {
+        if normals[s as usize].is_none() {
+            let r = ridge_of[i];
+            match first_ridge.get(&s) {
+                None => {
+                    first_ridge.insert(s, r);
+                }
+                Some(&r0) => {
+                    let (a, b) = (find(&mut parent, r0), find(&mut parent, r));
+                    parent[a.max(b) as usize] = a.min(b);
+                }
+            }
+        }
+    }
+    // The simplices with volume around each class.
+    let mut owners: Vec<(u32, u32)> = Vec::with_capacity(inc.len());
+    for (i, &(_, s)) in inc.iter().enumerate() {
+        if normals[s as usize].is_some() {
+            owners.push((find(&mut parent, ridge_of[i]), s));
+        }
+    }
+    owners.par_sort_unstable();
+    owners.dedup();
+    let mut is_crease = vec![false; ridges.len()];
+    let mut has_owner = vec![false; ridges.len()];
+    for group in owners.chunk_by(|a, b| a.0 == b.0) {
+        let class = group[0].0 as usize;
+        has_owner[class] = true;
+        is_crease[class] = group.len() < 2
+            || group.iter().enumerate().any(|(i, a)| {
+                let na = normals[a.1 as usize].unwrap();
+                group[i + 1..]
+                    .iter()
+                    .any(|b| dot(&na, &normals[b.1 as usize].unwrap()).abs() < cos_angle)
+            });
+    }
+    (0..ridges.len())
+        .filter(|&r| {
+            let class = find(&mut parent, r as u32) as usize;
+            has_owner[class] && is_crease[class]
+        })
+        .map(|r| ridges[r])
+        .collect()
+}
+
+/// Step 2: the feature faces of `m` vertices, given those of `m + 1` vertices.
+fn lower_features<const N: usize>(
+    vertices: &[Vector<N>],
+    faces: &[Key],
+    m: usize,
+    cos_angle: f64,
+) -> Vec<Key> {
+    // Every (face, direction away from it) of the faces above, grouped by face.
+    let mut inc: Vec<(Key, Vector<N>)> = faces
+        .par_iter()
+        .flat_map_iter(|f| {
+            (0..=m).filter_map(move |skip| {
+                let g = key_of((0..=m).filter(|&j| j != skip).map(|j| f[j]));
+                away(vertices, &g[..m], f[skip]).map(|d| (g, d))
+            })
+        })
+        .collect();
+    inc.par_sort_unstable_by(|a, b| a.0.cmp(&b.0));
+    inc.chunk_by(|a, b| a.0 == b.0)
+        .filter(|group| {
+            group.iter().enumerate().any(|(i, a)| {
+                group[i + 1..]
+                    .iter()
+                    .any(|b| dot(&a.1, &b.1).abs() < cos_angle)
+            })
+        })
+        .map(|group| group[0].0)
+        .collect()
+}
+
+/// The unit direction from the affine span of `face` toward `apex` (orthogonal to the span),
+/// or `None` if the apex lies on the span (within [`FLAT_TOLERANCE`] of its distance scale).
+fn away<const N: usize>(vertices: &[Vector<N>], face: &[u32], apex: u32) -> Option<Vector<N>> {
+    let o = vertices[face[0] as usize];
+    let mut d = sub(&vertices[apex as usize], &o);
+    let scale_len = norm(&d);
+    // Gram–Schmidt over the face's edges (twice, for accuracy).
+    let mut basis: Vec<Vector<N>> = Vec::with_capacity(face.len());
+    for &v in &face[1..] {
+        let mut e = sub(&vertices[v as usize], &o);
+        for _ in 0..2 {
+            for b in &basis {
+                let c = dot(&e, b);
+                e = crate::linalg::add_scaled(&e, -c, b);
+            }
+        }
+        let l = norm(&e);
+        if !(l > FLAT_TOLERANCE * norm(&sub(&vertices[v as usize], &o))) {
+            return None;
+        }
+        basis.push(scale(&e, 1.0 / l));
+    }
+    for _ in 0..2 {
+        for b in &basis {
+            let c = dot(&d, b);
+            d = crate::linalg::add_scaled(&d, -c, b);
+        }
+    }
+    let l = norm(&d);
+    (l > FLAT_TOLERANCE * scale_len).then(|| scale(&d, 1.0 / l))
+}
+
+#[cfg(test)]
+#[path = "features_tests.rs"]
+mod tests;

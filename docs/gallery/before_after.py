@@ -1,0 +1,32 @@
+"""Puts the gallery's 4D and 5D pictures beside what the same scenes gave before the
+illustrative composite (issue 19): docs/gallery/before/<name>.png (rendered at the earlier
+default, an opaque volume composite) above docs/gallery/<name>.png (now), in one strip,
+docs/gallery/before_after.png.
+
+    python docs/gallery/render_gallery.py && python docs/gallery/before_after.py
+"""
+
+import os
+
+from PIL import Image, ImageDraw
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+NAMES = ["tesseract", "cell16", "sphere3", "elevation", "penteract"]
+TILE = 256
+
+
+def main() -> None:
+    strip = Image.new("RGB", (TILE * len(NAMES), 2 * TILE + 40), (24, 24, 24))
+    draw = ImageDraw.Draw(strip)
+    for i, name in enumerate(NAMES):
+        for row, path in enumerate([os.path.join(HERE, "before", f"{name}.png"), os.path.join(HERE, f"{name}.png")]):
+            tile = Image.open(path).convert("RGB").resize((TILE, TILE), Image.LANCZOS)
+            strip.paste(tile, (i * TILE, 20 + row * TILE))
+        draw.text((i * TILE + 6, 4), name, fill=(230, 230, 230))
+    draw.text((4, 2 * TILE + 24), "top: before (opaque volume composite)   bottom: now (illustrative, exact 4D edges)",
+              fill=(230, 230, 230))
+    strip.save(os.path.join(HERE, "before_after.png"))
+
+
+if __name__ == "__main__":
+    main()
