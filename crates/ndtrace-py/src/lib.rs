@@ -1,6 +1,6 @@
 //! Python bindings of ndtrace: a thin layer that moves numpy buffers in and out of the pure-Rust
 //! core, releases the GIL while the core works, and converts core errors in one place
-//! ([`errors`]). Argument checking that speaks numpy (shapes, broadcasting) lives in the Python
+//! (`errors.rs`). Argument checking that speaks numpy (shapes, broadcasting) lives in the Python
 //! package `ndtrace`; the kernels here re-check sizes through the core's batch layer.
 
 use pyo3::prelude::*;

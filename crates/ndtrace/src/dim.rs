@@ -1,11 +1,11 @@
 //! The one place where a runtime dimension becomes a compile-time one.
 //!
 //! Everything numeric in ndtrace is generic over `const N: usize`; code that starts from a
-//! runtime `dim` (a scene file, a numpy array) goes through [`with_dim!`] (or, for a built
+//! runtime `dim` (a scene file, a numpy array) goes through [`with_dim!`](crate::with_dim) (or, for a built
 //! scene, [`crate::with_scene!`] on a [`crate::scene::AnyScene`]).
 //!
-//! The supported dimensions are written once, in [`supported_dims!`]: the `match` arms of
-//! [`with_dim!`] and [`crate::with_scene!`], the variants of [`crate::scene::AnyScene`] and
+//! The supported dimensions are written once, in [`supported_dims!`](crate::supported_dims): the `match` arms of
+//! [`with_dim!`](crate::with_dim) and [`crate::with_scene!`], the variants of [`crate::scene::AnyScene`] and
 //! [`SUPPORTED_DIMS`] (so [`MIN_DIM`] and [`MAX_DIM`]) are all generated from that list.
 
 /// Calls the macro `$then` with the supported dimensions: `supported_dims!(($then) ARGS)`
@@ -30,7 +30,7 @@ macro_rules! supported_dims {
     };
 }
 
-/// The list of [`supported_dims!`] as an array expression.
+/// The list of [`supported_dims!`](crate::supported_dims) as an array expression.
 #[doc(hidden)]
 #[macro_export]
 macro_rules! __dims_array {
@@ -39,7 +39,7 @@ macro_rules! __dims_array {
     };
 }
 
-/// The supported dimensions N, in increasing order (from [`supported_dims!`]).
+/// The supported dimensions N, in increasing order (from [`supported_dims!`](crate::supported_dims)).
 pub const SUPPORTED_DIMS: &[usize] = &crate::supported_dims!((crate::__dims_array));
 /// Smallest supported dimension N.
 pub const MIN_DIM: usize = SUPPORTED_DIMS[0];
@@ -88,7 +88,7 @@ macro_rules! with_dim {
     };
 }
 
-/// The `match` of [`with_dim!`], one arm per supported dimension.
+/// The `match` of [`with_dim!`](crate::with_dim), one arm per supported dimension.
 #[doc(hidden)]
 #[macro_export]
 macro_rules! __with_dim_arms {

@@ -3,7 +3,7 @@
 //! An opaque volume render of a 4D retina shows only the outer surface of the retina block, so
 //! a tesseract looks like a cube. The course notes say what a 4D picture should carry instead:
 //! "volume rendered projections of 4D lit hypersurfaces to 3D contain information similar to
-//! [a] 2D magazine photo" (shape from shading), with the "new cues: ridges, occlusion edges,
+//! \[a\] 2D magazine photo" (shape from shading), with the "new cues: ridges, occlusion edges,
 //! depth from occlusion". Here the cells are nearly clear, keeping their 4D-lit colour, and the
 //! opacity is concentrated where the retina has structure:
 //!

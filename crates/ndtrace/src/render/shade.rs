@@ -15,7 +15,7 @@ use crate::scene::{Light, Scene};
 
 /// Shadow rays start this fraction of the scene's diagonal off the surface, toward the light.
 /// The inside test widens every simplex, within its hyperplane, by its `BARY_SLACK` band: at
-/// most [`BOX_PAD`] of the simplex's extent, so of the scene's, beyond its boundary. A hit in
+/// most `BOX_PAD` of the simplex's extent, so of the scene's, beyond its boundary. A hit in
 /// that band just past a convex ridge, moved off by ten times the band or more (checked at
 /// compile time), lies on the outer side of the neighbouring simplex too, for folds up to
 /// atan(10) ≈ 84° between the two hyperplanes; so the shadow ray does not start behind it.
