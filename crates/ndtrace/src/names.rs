@@ -82,7 +82,7 @@ mod tests {
 
     #[test]
     fn variants_are_the_names_serde_accepts() {
-        accepted::<CompositeMode>(&["volume", "mip", "first_hit", "slices"]);
+        accepted::<CompositeMode>(&["volume", "mip", "first_hit", "slices", "illustrative"]);
         accepted::<Projection>(&["perspective", "orthographic"]);
         accepted::<RenderMode>(&["shaded", "depth", "normal", "primitive_id", "barycentric"]);
         assert!(variants::<f64>().is_empty());
