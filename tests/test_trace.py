@@ -812,6 +812,7 @@ def test_freed_retinas_lend_their_buffers_to_the_next_trace_which_overwrites_the
              .set_camera([0.7, 1.1, 1.9, 4.0], look_at=[0] * n, up=np.eye(n)[1:n - 1].tolist(),
                          fov=50, resolution=20)
              .add_object("sphere", subdivisions=1, transform=[{"translate": [0, 0, 0, 50.0]}]))
+    gc.collect()  # retinas of earlier tests, freed now rather than during this one
     ndtrace.release_buffers()
     a = ndtrace.trace(full, threads=1)
     assert a.hit.sum() > 100 and np.abs(a.normal).sum() > 100

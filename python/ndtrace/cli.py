@@ -474,7 +474,13 @@ def main(argv: list[str] | None = None) -> None:
     if given[:1] == ["view"]:  # a scene is a .toml or .py file, never "view"
         from .viewer.cli import main as view
 
-        sys.exit(view(given[1:]))
+        code = view(given[1:])
+        # A frame may still be tracing in the worker thread (the GIL released, in the core):
+        # end the process now rather than finalize the interpreter under a running native
+        # thread (which can crash at exit).
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
     debug = "--debug" in given
     for sig in (signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, _terminate)

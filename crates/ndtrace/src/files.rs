@@ -94,7 +94,7 @@ fn f32_channel(name: &str, v: Vec<f32>) -> AnyChannel<FlatSamples> {
 
 /// Writes a 2D picture as one RGBA part (plus `Z`).
 pub fn write_picture_exr(path: &Path, p: &Picture) -> NdResult<()> {
-    let n = p.width.checked_mul(p.height).unwrap_or(usize::MAX);
+    let n = p.width.saturating_mul(p.height);
     if n.checked_mul(4) != Some(p.rgba.len()) || p.width == 0 || p.height == 0 {
         return Err(NdError::Value {
             arg: "image".into(),

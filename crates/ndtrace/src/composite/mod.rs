@@ -156,9 +156,7 @@ pub fn composite_retina(
         stage += 1;
     }
     let rgba = match vol.shape.len() {
-        3 => match opts.mode {
-            _ => render_slices(&vol, opts, bg),
-        },
+        3 => render_slices(&vol, opts, bg),
         2 => {
             let (rows, cols) = (vol.shape[0], vol.shape[1]);
             let tiles = Tiles {
