@@ -21,6 +21,7 @@ try:
     from . import rotation
     from . import frames
     from . import mesh
+    from . import surfaces
     from .retina import Retina, trace
     from ._ndtrace import InternalError, release_buffers
     from .composite import composite
@@ -47,7 +48,7 @@ MIN_DIM: int = _ndtrace.MIN_DIM
 MAX_DIM: int = _ndtrace.MAX_DIM
 
 __all__ = [
-    "geometry", "rotation", "frames", "mesh", "visible_edges", "edge_segments", "Scene", "Retina", "trace", "release_buffers", "InternalError", "composite", "read_exr", "write_exr", "write_image", "write_png", "write_svg", "load_file", "load_dict", "load_toml", "animation", "animate",
+    "geometry", "rotation", "frames", "mesh", "surfaces", "visible_edges", "edge_segments", "Scene", "Retina", "trace", "release_buffers", "InternalError", "composite", "read_exr", "write_exr", "write_image", "write_png", "write_svg", "load_file", "load_dict", "load_toml", "animation", "animate",
     "display", "show", "viewer", "widget",
     "MIN_DIM", "MAX_DIM", "__version__",
 ]

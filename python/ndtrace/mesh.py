@@ -17,6 +17,8 @@ Every function takes and returns such a pair, so they compose::
     vertices, simplices = ndtrace.mesh.orient(vertices, simplices)    # repair orientation
     edges = ndtrace.mesh.feature_edges(vertices, simplices)           # the polytope's edges
     vertices, simplices = ndtrace.mesh.read("bunny.obj")               # meshio formats, .npz
+    vertices, simplices = ndtrace.mesh.thicken_surface(v4, triangles, radius=0.05)  # a tube in R^4
+    vertices, simplices = ndtrace.mesh.thicken_points(points4, radius=0.01)  # tiny 3-spheres
     scene.add_object("mesh", mesh=(vertices, simplices))               # or a trimesh / meshio mesh
 
 File formats: ``.npz`` archives with arrays ``vertices`` and ``simplices`` (any N, read by the
@@ -37,8 +39,10 @@ import numpy as np
 
 from . import _ndtrace
 from .geometry import generalized_cross
+from .thicken import thicken_points, thicken_surface
 
-__all__ = ["convex_hull", "orient", "feature_edges", "read", "from_object", "CELL_TYPES"]
+__all__ = ["convex_hull", "orient", "feature_edges", "read", "from_object", "thicken_surface",
+           "thicken_points", "CELL_TYPES"]
 
 #: The meshio cell types that hold the (N−1)-simplices of a dimension-N scene ("quad" cells are
 #: split into two triangles).

@@ -144,6 +144,13 @@ class Scene:
         self._data.setdefault("render", {}).update(_plain(options))
         return self._changed()
 
+    def set_composite(self, **options) -> "Scene":
+        """Sets ``[composite]`` options (how the retina becomes a picture: mode, crease_angle,
+        depth_cue, …; see ``docs/scene-format.md``), checked by the core when the scene is
+        rendered."""
+        self._data.setdefault("composite", {}).update(_plain(options))
+        return self._changed()
+
     # -- the built scene ----------------------------------------------------------------
     def compiled(self) -> _ndtrace.CompiledScene:
         """The validated, built scene (raises ValueError on a bad description)."""
