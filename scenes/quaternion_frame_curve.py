@@ -33,8 +33,11 @@ def scene() -> ndtrace.Scene:
     s = (
         ndtrace.Scene(4, ambient=[0.15, 0.15, 0.18])
         .set_camera([0.5, 0.8, 1.2, 3.5], look_at=[0, 0, 0, 0],
-                    up=[[0, 1, 0, 0], [0, 0, 1, 0]], fov=30, resolution=64)
+                    up=[[0, 1, 0, 0], [0, 0, 1, 0]], fov=30, resolution=96)
         .add_light("point", position=[2, 3, 1.5, 2.5])
+        # A thin tube is a smooth solid: its shaded first hit reads; the illustrative mode
+        # marks nearly every cell of it as a silhouette and shows a glowing wire.
+        .set_composite(mode="first_hit")
     )
     segment = np.arange(len(simplices)) * len(q) // len(simplices)  # tube_4d's layout: by segment
     band = segment * BANDS // len(q)
