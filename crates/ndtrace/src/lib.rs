@@ -39,6 +39,7 @@ pub mod render;
 pub mod rotation;
 pub mod scene;
 pub mod shapes;
+pub mod surface;
 
 #[cfg(test)]
 pub(crate) mod testutil;

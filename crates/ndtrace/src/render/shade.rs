@@ -111,20 +111,20 @@ pub(super) fn shading_normal<const N: usize>(
 }
 
 /// A light as seen from a point x.
-pub(super) struct TowardLight<'a, const N: usize> {
+pub(crate) struct TowardLight<'a, const N: usize> {
     /// The unit vector l̂ from x toward the light.
-    pub(super) dir: Vector<N>,
+    pub(crate) dir: Vector<N>,
     /// The distance to the light (infinite for a directional light).
-    pub(super) dist: f64,
+    pub(crate) dist: f64,
     /// The light's colour I_L.
-    pub(super) color: &'a Rgb,
+    pub(crate) color: &'a Rgb,
     /// The attenuation a_L of its colour at x: 1, or r^(−falloff) at distance r.
-    pub(super) atten: f64,
+    pub(crate) atten: f64,
 }
 
 /// `light` as seen from `x`; `None` when x is at a point light (no direction to it).
 #[inline(always)]
-pub(super) fn toward_light<'a, const N: usize>(
+pub(crate) fn toward_light<'a, const N: usize>(
     light: &'a Light<N>,
     x: &Vector<N>,
 ) -> Option<TowardLight<'a, N>> {
@@ -208,14 +208,14 @@ pub(super) fn light_term<const N: usize>(
 }
 
 /// A distinct, stable colour per global primitive id (the `primitive_id` render mode).
-pub(super) fn id_color(id: u32) -> Rgb {
+pub(crate) fn id_color(id: u32) -> Rgb {
     let mut h = SplitMix(id as u64);
     let v = h.next();
     std::array::from_fn(|k| 0.25 + 0.75 * (((v >> (k * 16)) & 0xffff) as f64 / 65535.0))
 }
 
 /// Near and far depth of the scene's bounding sphere, for the `depth` render mode.
-pub(super) fn depth_range<const N: usize>(scene: &Scene<N>) -> (f64, f64) {
+pub(crate) fn depth_range<const N: usize>(scene: &Scene<N>) -> (f64, f64) {
     let mut lo = [f64::INFINITY; N];
     let mut hi = [f64::NEG_INFINITY; N];
     for o in &scene.objects {

@@ -16,7 +16,8 @@ use crate::{NdError, NdResult};
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
 
-/// Traces every retina cell of `scene` (on the current rayon pool).
+/// Traces every retina cell of `scene` (on the current rayon pool), then projects its surface
+/// objects into the retina ([`crate::surface::splat`]).
 pub fn trace<const N: usize>(scene: &Scene<N>, progress: &Progress) -> NdResult<Retina> {
     // Back-face culling (course notes): discard a simplex when det[x_1−x_0 … | C − x_0] < 0,
     // i.e. when its normal points away from the eye. The eye is fixed per trace.
@@ -34,6 +35,11 @@ pub fn trace<const N: usize>(scene: &Scene<N>, progress: &Progress) -> NdResult<
     } else {
         trace_accepting(scene, progress, |_| true)
     }
+    .and_then(|mut retina| {
+        // Surfaces ("bear hair"), projected over what the rays saw.
+        crate::surface::splat(scene, &mut retina, progress)?;
+        Ok(retina)
+    })
 }
 
 /// [`trace`] with camera rays that see only the simplices whose global id passes `accept`.

@@ -38,8 +38,10 @@ pub struct Material {
     pub specular: Rgb,
     /// Blinn–Phong exponent.
     pub shininess: f64,
-    /// Interpolated vertex normals.
+    /// Interpolated vertex normals (surfaces: tangent planes).
     pub smooth: bool,
+    /// Fraction of light stopped (surface objects; 1 for every other object).
+    pub opacity: f64,
 }
 
 /// A light ready for shading.
@@ -69,6 +71,9 @@ pub struct Object<const N: usize> {
     /// ([`crate::convex::convex_side`]). Shadow rays leaving a simplex away from the body skip
     /// the object.
     pub convex: Option<bool>,
+    /// For a `surface` object: its triangles (into `mesh.vertices`; `mesh` has no simplices)
+    /// and how they are drawn.
+    pub surface: Option<crate::surface::Surface<N>>,
 }
 
 /// A scene ready to trace: world-space objects, the BVH over all their simplices (built once),
@@ -317,7 +322,16 @@ fn object_mesh<const N: usize>(
     if o.shape != ShapeKind::Sphere {
         extra("subdivisions", o.subdivisions.is_some())?;
     }
+    extra("triangles", o.triangles.is_some())?;
+    extra("width", o.width.is_some())?;
+    if o.material.opacity != 1.0 {
+        return Err(PathError::new(
+            format!("{path}.material.opacity"),
+            "only surface objects can be transparent (opacity < 1)",
+        ));
+    }
     Ok(match o.shape {
+        ShapeKind::Surface => unreachable!("surfaces are built by surface_mesh"),
         ShapeKind::Simplex => shapes::simplex_boundary::<N>(),
         ShapeKind::Hypercube => shapes::hypercube::<N>(),
         ShapeKind::CrossPolytope => shapes::cross_polytope::<N>(),
@@ -396,11 +410,102 @@ fn object_mesh<const N: usize>(
     })
 }
 
+/// A `surface` object (dim = 4): its vertices as a mesh without simplices, its triangles (those
+/// without area dropped, counted in the second value) and its sheet width.
+fn surface_mesh<const N: usize>(o: &ObjectDesc, path: &str) -> R<(Mesh<N>, Vec<[u32; 3]>, f64)> {
+    if N != 4 {
+        return Err(PathError::new(
+            format!("{path}.shape"),
+            format!("shape \"surface\" is a 2-surface in R^4: it needs dim = 4, got dim = {N}"),
+        ));
+    }
+    for (key, present) in [
+        ("simplices", o.simplices.is_some()),
+        ("file", o.file.is_some()),
+        ("subdivisions", o.subdivisions.is_some()),
+    ] {
+        if present {
+            return Err(PathError::new(
+                format!("{path}.{key}"),
+                format!("\"{key}\" is not used by shape \"surface\" (give vertices and triangles)"),
+            ));
+        }
+    }
+    let (Some(v), Some(t)) = (&o.vertices, &o.triangles) else {
+        return Err(PathError::new(
+            path,
+            "a surface needs vertices (V, 4) and triangles (T, 3)",
+        ));
+    };
+    let width = o.width.unwrap_or(crate::surface::DEFAULT_WIDTH);
+    if !(width > 0.0 && width <= crate::surface::MAX_WIDTH) {
+        return Err(PathError::new(
+            format!("{path}.width"),
+            format!(
+                "must be a number of retina cells in (0, {}], got {width}",
+                crate::surface::MAX_WIDTH
+            ),
+        ));
+    }
+    for (i, row) in v.iter().enumerate() {
+        if row.len() != N {
+            return Err(PathError::new(
+                format!("{path}.vertices[{i}]"),
+                format!("expected {N} numbers (dim = {N}), got {}", row.len()),
+            ));
+        }
+    }
+    let flat_v: Vec<f64> = v.iter().flatten().copied().collect();
+    let vpath = format!("{path}.vertices");
+    let mesh = mesh_from_rows::<N>(&flat_v, v.len(), &[], 0, path, &vpath, &vpath)?;
+    crate::memory::check(
+        t.len() as f64 * 12.0,
+        &format!("a surface of {} triangles", t.len()),
+    )
+    .map_err(|e| PathError::new(path, e))?;
+    let mut triangles = Vec::with_capacity(t.len());
+    for (i, row) in t.iter().enumerate() {
+        if row.len() != 3 {
+            return Err(PathError::new(
+                format!("{path}.triangles[{i}]"),
+                format!("a triangle has 3 vertex indices, got {}", row.len()),
+            ));
+        }
+        let mut idx = [0u32; 3];
+        for (k, &x) in row.iter().enumerate() {
+            if !(x >= 0 && (x as u64) < v.len() as u64) {
+                return Err(PathError::new(
+                    format!("{path}.triangles[{i}][{k}]"),
+                    format!(
+                        "vertex index {x} out of range: the surface has {} vertices",
+                        v.len()
+                    ),
+                ));
+            }
+            idx[k] = x as u32;
+        }
+        if idx[0] == idx[1] || idx[1] == idx[2] || idx[0] == idx[2] {
+            return Err(PathError::new(
+                format!("{path}.triangles[{i}]"),
+                format!("repeats a vertex: {idx:?}"),
+            ));
+        }
+        triangles.push(idx);
+    }
+    Ok((mesh, triangles, width))
+}
+
 fn shape_name(k: ShapeKind) -> &'static str {
     ShapeKind::NAMES[k as usize]
 }
 
 fn material(m: &MaterialDesc, path: &str) -> R<Material> {
+    if !(m.opacity > 0.0 && m.opacity <= 1.0) {
+        return Err(PathError::new(
+            format!("{path}.opacity"),
+            format!("must be in (0, 1], got {}", m.opacity),
+        ));
+    }
     if !(m.shininess >= 0.0 && m.shininess.is_finite()) {
         return Err(PathError::new(
             format!("{path}.shininess"),
@@ -414,6 +519,7 @@ fn material(m: &MaterialDesc, path: &str) -> R<Material> {
         specular: coefficient(&m.specular, &format!("{path}.specular"))?,
         shininess: m.shininess,
         smooth: m.smooth,
+        opacity: m.opacity,
     })
 }
 
@@ -503,8 +609,15 @@ pub fn build_with<const N: usize>(
     //    outward normals inward (normals are pseudotensors), so such simplices are reordered to
     //    keep their orientation.
     let mut objects = Vec::with_capacity(desc.objects.len());
+    let mut surface_warnings = Vec::new();
     for (i, (o, (mat, (a, b)))) in desc.objects.iter().zip(plans).enumerate() {
-        let mut mesh = object_mesh::<N>(o, &format!("objects[{i}]"), base, reader)?;
+        let path = format!("objects[{i}]");
+        let (mut mesh, triangles) = if o.shape == ShapeKind::Surface {
+            let (m, t, w) = surface_mesh::<N>(o, &path)?;
+            (m, Some((t, w)))
+        } else {
+            (object_mesh::<N>(o, &path, base, reader)?, None)
+        };
         mesh.vertices
             .par_iter_mut()
             .for_each(|v| *v = add(&mat_vec(&a, v), &b));
@@ -521,12 +634,40 @@ pub fn build_with<const N: usize>(
         if det(&a) < 0.0 {
             mesh.simplices.iter_mut().for_each(|s| s.swap(0, 1));
         }
-        let vertex_normals = mat.smooth.then(|| shapes::vertex_normals(&mesh));
+        let surface = triangles.map(|(t, width)| {
+            // Triangles without area have no tangent plane: left out.
+            let kept: Vec<[u32; 3]> = t
+                .into_iter()
+                .filter(|tri| {
+                    let [a, b, c] = tri.map(|k| mesh.vertices[k as usize]);
+                    crate::surface::tangent_projector(&a, &b, &c).is_some()
+                })
+                .collect();
+            let vertex_tangents = mat
+                .smooth
+                .then(|| crate::surface::vertex_tangents(&mesh.vertices, &kept));
+            crate::surface::Surface {
+                triangles: kept,
+                width,
+                vertex_tangents,
+            }
+        });
+        if let (Some(s), Some(t)) = (&surface, &o.triangles) {
+            if s.triangles.len() < t.len() {
+                surface_warnings.push(format!(
+                    "objects[{i}]: left out {} surface triangles without area",
+                    t.len() - s.triangles.len()
+                ));
+            }
+        }
+        let vertex_normals =
+            (mat.smooth && surface.is_none()).then(|| shapes::vertex_normals(&mesh));
         objects.push(Object {
             mesh,
             material: mat,
             vertex_normals,
             convex: None,
+            surface,
         });
     }
     // 3. Prepared simplices and the BVH.
@@ -608,7 +749,16 @@ pub fn build_with<const N: usize>(
             }
         }
     }
-    let extent = if prims.is_empty() {
+    // Surface vertices count toward the scene's extent (it sets their shadow rays' offset).
+    for o in objects.iter().filter(|o| o.surface.is_some()) {
+        for v in &o.mesh.vertices {
+            for k in 0..N {
+                lo[k] = lo[k].min(v[k]);
+                hi[k] = hi[k].max(v[k]);
+            }
+        }
+    }
+    let extent = if !lo[0].is_finite() {
         1.0
     } else {
         norm(&std::array::from_fn::<f64, N, _>(|k| hi[k] - lo[k])).max(1e-300)
@@ -617,6 +767,7 @@ pub fn build_with<const N: usize>(
         .filter(|(_, (_, d))| d.shape == ShapeKind::Mesh)
         .filter_map(|(i, (o, _))| orientation_warning(&o.mesh, &format!("objects[{i}]")))
         .collect();
+    warnings.extend(surface_warnings);
     if skipped > 0 {
         warnings.push(format!(
             "skipped {skipped} degenerate (zero-volume) simplices"

@@ -256,12 +256,21 @@ pub enum ShapeKind {
     CrossPolytope,
     /// The unit sphere S^{N−1}, `subdivisions` levels.
     Sphere,
+    /// A triangulated 2-surface in R^4 (`vertices`, `triangles`), rendered directly by the
+    /// limit of circle-bundle thickening ("bear hair", [`crate::surface`]).
+    Surface,
 }
 
 impl ShapeKind {
     /// The names accepted in scene files.
-    pub const NAMES: [&'static str; 5] =
-        ["mesh", "simplex", "hypercube", "cross_polytope", "sphere"];
+    pub const NAMES: [&'static str; 6] = [
+        "mesh",
+        "simplex",
+        "hypercube",
+        "cross_polytope",
+        "sphere",
+        "surface",
+    ];
 }
 
 /// An object: a shape, a material and a transform.
@@ -276,6 +285,13 @@ pub struct ObjectDesc {
     /// Mesh: vertex indices (S, N) of each (N−1)-simplex.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub simplices: Option<Vec<Vec<i64>>>,
+    /// Surface: vertex indices (T, 3) of each triangle.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub triangles: Option<Vec<Vec<i64>>>,
+    /// Surface: the width of its sheet in the retina, in retina cells (default
+    /// [`crate::surface::DEFAULT_WIDTH`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<f64>,
     /// Mesh: a `.npz` file holding `vertices` and `simplices`, relative to the scene file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub file: Option<String>,
@@ -319,9 +335,14 @@ pub struct MaterialDesc {
     /// Blinn–Phong exponent (default 32).
     #[serde(default = "default_shininess")]
     pub shininess: f64,
-    /// Per-vertex normals averaged from neighbouring simplices, interpolated barycentrically.
+    /// Per-vertex normals averaged from neighbouring simplices, interpolated barycentrically
+    /// (for a surface: per-vertex tangent planes).
     #[serde(default)]
     pub smooth: bool,
+    /// Surface objects: the fraction of light the surface stops (1 opaque, the default; what
+    /// lies behind shows through the rest).
+    #[serde(default = "one_f64", skip_serializing_if = "is_one")]
+    pub opacity: f64,
 }
 
 fn default_color() -> Vec<f64> {
@@ -336,6 +357,12 @@ fn zero() -> Coefficient {
 fn default_shininess() -> f64 {
     32.0
 }
+fn one_f64() -> f64 {
+    1.0
+}
+fn is_one(x: &f64) -> bool {
+    *x == 1.0
+}
 
 impl Default for MaterialDesc {
     fn default() -> Self {
@@ -346,6 +373,7 @@ impl Default for MaterialDesc {
             specular: zero(),
             shininess: default_shininess(),
             smooth: false,
+            opacity: 1.0,
         }
     }
 }
