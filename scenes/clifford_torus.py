@@ -17,7 +17,8 @@ SAMPLES = 48
 BANDS = 8  # colour bands along u
 
 
-def scene() -> ndtrace.Scene:
+def scene(hair: bool = False) -> ndtrace.Scene:
+    """The thickened surface; with ``hair``, the surface itself (shape \"surface\", bear hair)."""
     v, t = surfaces.clifford_torus(SAMPLES)
     s = (
         ndtrace.Scene(4, background=[0.03, 0.03, 0.05], ambient=[0.15, 0.15, 0.18])
@@ -28,6 +29,9 @@ def scene() -> ndtrace.Scene:
     )
     u_band = (np.arange(len(t)) % (SAMPLES * SAMPLES) // SAMPLES * BANDS // SAMPLES) % 2 == 0
     for keep, color in ((u_band, [0.95, 0.6, 0.2]), (~u_band, [0.25, 0.5, 0.95])):
+        if hair:
+            s.add_object("surface", vertices=v, triangles=t[keep], material={"color": color, "specular": 0.5, "shininess": 40, "smooth": True})
+            continue
         tv, ts = ndtrace.mesh.thicken_surface(v, t[keep], radius=0.035, segments=12)
         s.add_object("mesh", vertices=tv, simplices=ts,
                      material={"color": color, "specular": 0.5, "shininess": 40})

@@ -14,7 +14,8 @@ import ndtrace
 from ndtrace import surfaces
 
 
-def scene() -> ndtrace.Scene:
+def scene(hair: bool = False) -> ndtrace.Scene:
+    """The thickened surface; with ``hair``, the surface itself (shape \"surface\", bear hair)."""
     v, t = surfaces.riemann_root(2, radius=1.0, rings=14, sectors=40)
     s = (
         ndtrace.Scene(4, background=[0.03, 0.03, 0.05], ambient=[0.15, 0.15, 0.18])
@@ -25,6 +26,9 @@ def scene() -> ndtrace.Scene:
     )
     sheet = v[t, 2].mean(axis=1) > 0
     for keep, color in ((sheet, [0.95, 0.55, 0.2]), (~sheet, [0.3, 0.55, 0.95])):
+        if hair:
+            s.add_object("surface", vertices=v, triangles=t[keep], material={"color": color, "specular": 0.5, "shininess": 40, "smooth": True})
+            continue
         tv, ts = ndtrace.mesh.thicken_surface(v, t[keep], radius=0.02, segments=10)
         s.add_object("mesh", vertices=tv, simplices=ts, material={"color": color, "specular": 0.5, "shininess": 40})
     return s.set_render(samples=4).set_composite(mode="first_hit")

@@ -19,7 +19,8 @@ from ndtrace import surfaces
 SAMPLES, SECTORS = 120, 36
 
 
-def scene() -> ndtrace.Scene:
+def scene(hair: bool = False) -> ndtrace.Scene:
+    """The thickened surface; with ``hair``, the surface itself (shape \"surface\", bear hair)."""
     v, t = surfaces.spun_knot(SAMPLES, SECTORS)
     theta = np.arctan2(v[:, 3], v[:, 2])
     s = (
@@ -31,6 +32,9 @@ def scene() -> ndtrace.Scene:
     )
     near = np.abs(theta[t]).mean(axis=1) < np.pi / 2  # the half of the sphere with cos θ > 0
     for keep, color in ((near, [0.95, 0.55, 0.2]), (~near, [0.3, 0.55, 0.95])):
+        if hair:
+            s.add_object("surface", vertices=v, triangles=t[keep], material={"color": color, "specular": 0.5, "shininess": 40, "smooth": True})
+            continue
         tv, ts = ndtrace.mesh.thicken_surface(v, t[keep], radius=0.035, segments=10)
         s.add_object("mesh", vertices=tv, simplices=ts, material={"color": color, "specular": 0.5, "shininess": 40})
     # Cut away the near half of the retina volume so the profile — the knotted arc — shows inside.

@@ -41,7 +41,7 @@ def test_the_bear_hair_mask_is_the_thin_thickened_surfaces():
     a, b = hair.hit, tube.hit
     iou = (a & b).sum() / (a | b).sum()
     assert a.sum() > 2000 and b.sum() > 2000
-    assert iou >= 0.8, iou
+    assert iou >= 0.95, iou  # 0.99 measured; the issue asks ≥ 0.8
 
 
 @pytest.mark.parametrize("material", [{"smooth": True},
@@ -52,7 +52,7 @@ def test_the_bear_hair_shading_is_the_thickened_surfaces_average(material):
     hair, tube = both(5.0, material, samples=8)
     mean = lambda r: (r.rgba[..., :3].sum(axis=(0, 1, 2)) / r.rgba[..., 3].sum())
     got, want = mean(hair), mean(tube)
-    assert np.allclose(got, want, rtol=0.05), (got, want)
+    assert np.allclose(got, want, rtol=0.03), (got, want)  # within 1.3 % measured
 
 
 def test_surfaces_occlude_and_are_occluded_in_4d():

@@ -25,7 +25,7 @@ pub use splat::splat;
 use crate::linalg::{dot, norm, scale, sub, Matrix, Vector};
 
 /// Default width of a surface's sheet in the retina, in cells.
-pub const DEFAULT_WIDTH: f64 = 1.25;
+pub const DEFAULT_WIDTH: f64 = 2.0;
 /// Largest sheet width accepted, in cells.
 pub const MAX_WIDTH: f64 = 64.0;
 /// Most layers of one cell blended (nearest first) where a surface overlaps itself.
