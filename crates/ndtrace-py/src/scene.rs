@@ -58,7 +58,21 @@ impl CompiledScene {
 
     /// The camera section of the description as TOML (stored in retina files).
     fn camera_toml(&self) -> PyResult<String> {
-        scene::to_toml(&self.desc)
+        // Only the camera section is wanted: serialize the description without its objects
+        // (whose inline meshes would cost time in proportion to the scene's size).
+        let d = &self.desc;
+        let camera_only = scene::SceneDesc {
+            dim: d.dim,
+            background: d.background.clone(),
+            ambient: d.ambient.clone(),
+            camera: d.camera.clone(),
+            lights: Vec::new(),
+            objects: Vec::new(),
+            render: d.render.clone(),
+            composite: None,
+            animation: None,
+        };
+        scene::to_toml(&camera_only)
             .map(|t| {
                 let start = t.find("[camera]").unwrap_or(0);
                 let rest = &t[start..];
