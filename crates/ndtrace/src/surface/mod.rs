@@ -13,7 +13,7 @@
 //! `shade.rs` (the limit lighting), `splat.rs` (projection into the retina, fragments, their
 //! occlusion and blending).
 
-mod shade;
+pub mod shade;
 mod splat;
 
 #[cfg(test)]
