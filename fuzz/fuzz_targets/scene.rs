@@ -6,7 +6,7 @@ use libfuzzer_sys::fuzz_target;
 mod common;
 
 fuzz_target!(|data: &[u8]| {
-    common::init();
+    common::init_scene();
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };

@@ -6,7 +6,11 @@ use crate::errors::guarded;
 use ndtrace::mesh::orientation;
 use ndtrace::scene::npz::Array2;
 use ndtrace::scene::MeshReader;
-use numpy::{PyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use ndtrace::mesh::elevation::{self, Field};
+use ndtrace::scene::npz::ArrayNd;
+use numpy::{
+    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use std::path::Path;
 
@@ -54,6 +58,77 @@ impl MeshReader for PyMeshReader {
             ])
         })
     }
+
+    fn read_field(&self, path: &Path) -> Result<ArrayNd, String> {
+        self.field(path)
+    }
+}
+
+impl PyMeshReader {
+    /// `reader.field(path)` → a 3-D float64 array (NIfTI through nibabel).
+    fn field(&self, path: &Path) -> Result<ArrayNd, String> {
+        Python::attach(|py| {
+            let message = |e: PyErr| e.value(py).to_string();
+            let out = self
+                .0
+                .bind(py)
+                .call_method1("field", (path.to_string_lossy().into_owned(),))
+                .map_err(message)?;
+            let a: PyReadonlyArray3<'_, f64> =
+                out.extract().map_err(|e| message(PyErr::from(e)))?;
+            let shape = a.shape().to_vec();
+            let data = a
+                .as_array()
+                .as_standard_layout()
+                .as_slice()
+                .map(|s| s.to_vec())
+                .ok_or("not a 3-D array")?;
+            Ok(ArrayNd {
+                shape,
+                data,
+                integer: false,
+                dtype: "<f8".into(),
+            })
+        })
+    }
+}
+
+/// `ndtrace.mesh.elevation_map`: the vertices (V, 4), simplices (S, 4) and holes of the
+/// elevation map of a C-ordered 3-D float64 field (checked by the Python wrapper).
+#[pyfunction]
+#[pyo3(signature = (field, extent, height))]
+#[allow(clippy::type_complexity)]
+fn elevation_map<'py>(
+    py: Python<'py>,
+    field: PyReadonlyArray3<'py, f64>,
+    extent: Option<[[f64; 2]; 3]>,
+    height: f64,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>, usize)> {
+    let shape = field.shape();
+    let shape = [shape[0], shape[1], shape[2]];
+    let values = field.as_slice().map_err(|_| {
+        pyo3::exceptions::PyValueError::new_err("field: expected a C-contiguous array")
+    })?;
+    let e = py
+        .detach(|| {
+            guarded("mesh.elevation_map", || {
+                Ok(elevation::elevation_map::<4>(
+                    &Field { values, shape },
+                    extent.as_ref(),
+                    height,
+                ))
+            })
+        })?
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(format!("field: {e}")))?;
+    let v: Vec<f64> = e.mesh.vertices.iter().flatten().copied().collect();
+    let s: Vec<i64> = e.mesh.simplices.iter().flatten().map(|&i| i64::from(i)).collect();
+    let nv = e.mesh.vertices.len();
+    let ns = e.mesh.simplices.len();
+    Ok((
+        PyArray1::from_vec(py, v).reshape([nv, 4])?,
+        PyArray1::from_vec(py, s).reshape([ns, 4])?,
+        e.holes,
+    ))
 }
 
 /// Which simplices to flip so that the mesh is consistently oriented, outward where closed
@@ -74,5 +149,6 @@ fn orient_flips<'py>(
 /// Adds the mesh functions.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(orient_flips, m)?)?;
+    m.add_function(wrap_pyfunction!(elevation_map, m)?)?;
     Ok(())
 }

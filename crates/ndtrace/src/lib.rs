@@ -40,6 +40,7 @@ pub mod rotation;
 pub mod scene;
 pub mod shapes;
 pub mod surface;
+pub mod texture;
 
 #[cfg(test)]
 pub(crate) mod testutil;

@@ -27,5 +27,6 @@ impl<const N: usize> Mesh<N> {
     }
 }
 
+pub mod elevation;
 pub mod features;
 pub use features::feature_edges;

@@ -13,7 +13,8 @@
 //!   object is the whole scene.
 
 use super::shade::{
-    blinn_phong, id_color, light_term, shading_normal, shadow_ray, toward_light, SHADOW_OFFSET,
+    blinn_phong, hit_color, id_color, light_term, shading_normal, shadow_ray, toward_light,
+    SHADOW_OFFSET,
 };
 use super::NearestHit;
 use crate::linalg::{add_scaled, dot, norm, scale, Vector};
@@ -125,11 +126,19 @@ impl<const N: usize> GroupTracer<N> {
             let c = match scene.render.mode {
                 RenderMode::Shaded => {
                     let sh = &shading[obj];
-                    let mut c = sh.ambient;
+                    // A texture's colour C at the hit, in the object's constants' place.
+                    let textured = hit_color(scene, obj, local, hit, ray).map(|color| {
+                        let m = &scene.objects[obj].material;
+                        let ambient: [f64; 3] =
+                            std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * color[k]);
+                        let diffuse: [f64; 3] = std::array::from_fn(|k| m.diffuse[k] * color[k]);
+                        (ambient, diffuse)
+                    });
+                    let (mut c, diffuse) = textured.unwrap_or((sh.ambient, sh.diffuse));
                     // Terms are summed in light order: directly until one waits for its shadow
                     // ray, then after the shadow pass.
                     let mut waiting = false;
-                    light_terms(scene, ray, dir_len, hit, obj, sh, &n, |l, color, shadow| {
+                    light_terms(scene, ray, dir_len, hit, obj, sh, &diffuse, &n, |l, color, shadow| {
                         if shadow.is_none() && !waiting {
                             for k in 0..3 {
                                 c[k] += color[k];
@@ -214,7 +223,8 @@ impl<const N: usize> GroupTracer<N> {
     }
 }
 
-/// The light terms of [`super::shade_hit`] for one hit, with the object's constants `sh`:
+/// The light terms of [`super::shade_hit`] for one hit, with the object's constants `sh` and
+/// the diffuse coefficient times the colour at the hit `diffuse`:
 /// calls `emit` per light that faces the surface, in light order, with its index, its colour
 /// term and the shadow ray that decides whether it counts (none when nothing could block it).
 /// Lights behind the surface contribute nothing and need no shadow ray. `dir_len` is
@@ -228,6 +238,7 @@ fn light_terms<const N: usize>(
     hit: &Hit<N>,
     obj: usize,
     sh: &ObjectShading,
+    diffuse: &[f64; 3],
     n: &Vector<N>,
     mut emit: impl FnMut(usize, [f64; 3], Option<ShadowRay<N>>),
 ) {
@@ -271,7 +282,7 @@ fn light_terms<const N: usize>(
         };
         emit(
             index,
-            light_term(&to_light, &sh.diffuse, ndl, &m.specular, spec),
+            light_term(&to_light, diffuse, ndl, &m.specular, spec),
             shadow,
         );
     }

@@ -50,8 +50,9 @@ pub fn shade_hit<const N: usize>(scene: &Scene<N>, ray: &Ray<N>, hit: &Hit<N>) -
     let x = ray.at(hit.t);
     let v = scale(&ray.dir, -1.0 / norm(&ray.dir));
     let eps = SHADOW_OFFSET * scene.extent;
+    let color = hit_color(scene, obj, local, hit, ray).unwrap_or(m.color);
     // Ambient: k_a ∘ A ∘ C.
-    let mut c: Rgb = std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k]);
+    let mut c: Rgb = std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * color[k]);
     for light in &scene.lights {
         let Some(to_light) = toward_light(light, &x) else {
             continue;
@@ -69,7 +70,7 @@ pub fn shade_hit<const N: usize>(scene: &Scene<N>, ray: &Ray<N>, hit: &Hit<N>) -
                 continue;
             }
         }
-        let diffuse: Rgb = std::array::from_fn(|k| m.diffuse[k] * m.color[k]);
+        let diffuse: Rgb = std::array::from_fn(|k| m.diffuse[k] * color[k]);
         let spec = blinn_phong(&n, &l, &v, m.shininess);
         let term = light_term(&to_light, &diffuse, ndl, &m.specular, spec);
         for k in 0..3 {
@@ -77,6 +78,21 @@ pub fn shade_hit<const N: usize>(scene: &Scene<N>, ray: &Ray<N>, hit: &Hit<N>) -
         }
     }
     c
+}
+
+/// The colour C at a hit on simplex `local` of object `obj` when the object has a texture
+/// ([`crate::texture`]); `None` when C is the material's colour everywhere.
+#[inline(always)]
+pub(super) fn hit_color<const N: usize>(
+    scene: &Scene<N>,
+    obj: usize,
+    local: usize,
+    hit: &Hit<N>,
+    ray: &Ray<N>,
+) -> Option<Rgb> {
+    let o = &scene.objects[obj];
+    let t = o.texture.as_ref()?;
+    Some(t.color(&o.material.color, &o.mesh, local, &hit.bary, &ray.at(hit.t)))
 }
 
 /// The unit shading normal at a hit on simplex `local` of object `obj`: flat (eq. 6) or

@@ -9,7 +9,11 @@ use super::mesh_file::{orientation_warning, read_mesh, MeshReader};
 use super::transform::transform;
 use crate::accel::{Bvh, PreparedSimplex};
 use crate::camera::{look_at_orientation, Camera};
-use crate::linalg::{add, det, dot, identity, mat_mul, mat_vec, norm, scale, Matrix, Vector};
+use super::elevation::{elevation_object, reject_elevation_keys};
+use crate::linalg::{
+    add, cofactor_matrix, det, dot, identity, mat_mul, mat_vec, norm, scale, transpose, Matrix,
+    Vector,
+};
 use crate::mesh::Mesh;
 use crate::shapes;
 use rayon::prelude::*;
@@ -23,6 +27,10 @@ pub const MAX_GENERATED_SIMPLICES: u64 = 50_000_000;
 /// object id i32, primitive id i64.
 pub const fn retina_bytes_per_cell(n: usize) -> usize {
     16 + 4 + 4 * n + 4 + 8
+}
+
+fn scale_matrix<const N: usize>(m: &Matrix<N>, s: f64) -> Matrix<N> {
+    m.map(|row| scale(&row, s))
 }
 
 /// Surface appearance with every coefficient resolved to RGB.
@@ -42,6 +50,8 @@ pub struct Material {
     pub smooth: bool,
     /// Fraction of light stopped (surface objects; 1 for every other object).
     pub opacity: f64,
+    /// Colour varying over the object: colormap, isolines, lattice.
+    pub texture: Option<crate::texture::TextureSpec>,
 }
 
 /// A light ready for shading.
@@ -74,6 +84,8 @@ pub struct Object<const N: usize> {
     /// For a `surface` object: its triangles (into `mesh.vertices`; `mesh` has no simplices)
     /// and how they are drawn.
     pub surface: Option<crate::surface::Surface<N>>,
+    /// Colour varying over the object ([`crate::texture`]).
+    pub texture: Option<crate::texture::Texture<N>>,
 }
 
 /// A scene ready to trace: world-space objects, the BVH over all their simplices (built once),
@@ -298,6 +310,17 @@ fn bvh_bytes_per_simplex(n: usize) -> f64 {
     3.0 * prepared + (5 * n * 8 + 16) as f64
 }
 
+/// Only surface objects may be transparent.
+fn opaque(o: &ObjectDesc, path: &str) -> R<()> {
+    if o.material.opacity != 1.0 {
+        return Err(PathError::new(
+            format!("{path}.material.opacity"),
+            "only surface objects can be transparent (opacity < 1)",
+        ));
+    }
+    Ok(())
+}
+
 fn object_mesh<const N: usize>(
     o: &ObjectDesc,
     path: &str,
@@ -324,14 +347,11 @@ fn object_mesh<const N: usize>(
     }
     extra("triangles", o.triangles.is_some())?;
     extra("width", o.width.is_some())?;
-    if o.material.opacity != 1.0 {
-        return Err(PathError::new(
-            format!("{path}.material.opacity"),
-            "only surface objects can be transparent (opacity < 1)",
-        ));
-    }
+    opaque(o, path)?;
     Ok(match o.shape {
-        ShapeKind::Surface => unreachable!("surfaces are built by surface_mesh"),
+        ShapeKind::Surface | ShapeKind::Elevation => {
+            unreachable!("surfaces and elevation maps have their own builders")
+        }
         ShapeKind::Simplex => shapes::simplex_boundary::<N>(),
         ShapeKind::Hypercube => shapes::hypercube::<N>(),
         ShapeKind::CrossPolytope => shapes::cross_polytope::<N>(),
@@ -352,6 +372,12 @@ fn object_mesh<const N: usize>(
                     format!("{s} subdivisions would make {count_text} simplices (limit {MAX_GENERATED_SIMPLICES})"),
                 ));
             }
+            // The mesh and the BVH it will need, refused before the work of generating it.
+            crate::memory::check(
+                count * (4.0 * N as f64 + bvh_bytes_per_simplex(N)),
+                &format!("a sphere of {count} simplices and its BVH"),
+            )
+            .map_err(|e| PathError::new(format!("{path}.subdivisions"), e))?;
             shapes::sphere::<N>(s)
         }
         ShapeKind::Mesh => match (&o.vertices, &o.simplices, &o.file) {
@@ -520,7 +546,103 @@ fn material(m: &MaterialDesc, path: &str) -> R<Material> {
         shininess: m.shininess,
         smooth: m.smooth,
         opacity: m.opacity,
+        texture: texture_spec(m, path)?,
     })
+}
+
+/// The texture keys of a material (`colormap`, `range`, `isolines`, `lattice`).
+fn texture_spec(m: &MaterialDesc, path: &str) -> R<Option<crate::texture::TextureSpec>> {
+    use crate::texture::{colormap, Isolines, Lattice, TextureSpec};
+    let colormap = match &m.colormap {
+        None => {
+            if m.range.is_some() {
+                return Err(PathError::new(
+                    format!("{path}.range"),
+                    "\"range\" sets the values at a colormap's ends: give material.colormap",
+                ));
+            }
+            None
+        }
+        Some(name) => {
+            let map = colormap::get(name).ok_or_else(|| {
+                PathError::new(
+                    format!("{path}.colormap"),
+                    format!(
+                        "unknown colormap \"{name}\" (known: {}; \"_r\" reverses one)",
+                        colormap::names().join(", ")
+                    ),
+                )
+            })?;
+            let range = match &m.range {
+                None => None,
+                Some(r) => match r[..] {
+                    [lo, hi] if lo.is_finite() && hi.is_finite() && hi != lo => Some([lo, hi]),
+                    _ => {
+                        return Err(PathError::new(
+                            format!("{path}.range"),
+                            format!("expected [low, high], two different finite numbers, got {r:?}"),
+                        ))
+                    }
+                },
+            };
+            Some((map, range))
+        }
+    };
+    let positive = |x: f64, key: &str| -> R<f64> {
+        if x > 0.0 && x.is_finite() {
+            Ok(x)
+        } else {
+            Err(PathError::new(
+                format!("{path}.{key}"),
+                format!("must be a finite number > 0, got {x}"),
+            ))
+        }
+    };
+    let isolines = match &m.isolines {
+        None => None,
+        Some(i) => {
+            if let Some(k) = i.values.iter().position(|v| !v.is_finite()) {
+                return Err(PathError::new(
+                    format!("{path}.isolines.values[{k}]"),
+                    format!("must be finite, got {}", i.values[k]),
+                ));
+            }
+            Some(Isolines {
+                values: i.values.clone(),
+                width: positive(i.width.unwrap_or(0.03), "isolines.width")?,
+                color: match &i.color {
+                    Some(c) => rgb(c, &format!("{path}.isolines.color"))?,
+                    None => [0.02, 0.02, 0.02],
+                },
+            })
+        }
+    };
+    let lattice = match &m.lattice {
+        None => None,
+        Some(l) => {
+            let spacing = positive(l.spacing, "lattice.spacing")?;
+            let width = positive(l.width.unwrap_or(spacing / 12.0), "lattice.width")?;
+            if width >= spacing {
+                return Err(PathError::new(
+                    format!("{path}.lattice.width"),
+                    format!("must be less than the spacing {spacing}, got {width}"),
+                ));
+            }
+            Some(Lattice {
+                spacing,
+                width,
+                color: match &l.color {
+                    Some(c) => rgb(c, &format!("{path}.lattice.color"))?,
+                    None => [1.0, 1.0, 1.0],
+                },
+            })
+        }
+    };
+    Ok((colormap.is_some() || isolines.is_some() || lattice.is_some()).then_some(TextureSpec {
+        colormap,
+        isolines,
+        lattice,
+    }))
 }
 
 fn light<const N: usize>(l: &LightDesc, path: &str) -> R<Light<N>> {
@@ -612,12 +734,65 @@ pub fn build_with<const N: usize>(
     let mut surface_warnings = Vec::new();
     for (i, (o, (mat, (a, b)))) in desc.objects.iter().zip(plans).enumerate() {
         let path = format!("objects[{i}]");
-        let (mut mesh, triangles) = if o.shape == ShapeKind::Surface {
-            let (m, t, w) = surface_mesh::<N>(o, &path)?;
-            (m, Some((t, w)))
-        } else {
-            (object_mesh::<N>(o, &path, base, reader)?, None)
+        let mut values = None;
+        let mut own_normals = None;
+        let (mut mesh, triangles) = match o.shape {
+            ShapeKind::Surface => {
+                reject_elevation_keys(o, &path)?;
+                let (m, t, w) = surface_mesh::<N>(o, &path)?;
+                (m, Some((t, w)))
+            }
+            ShapeKind::Elevation => {
+                opaque(o, &path)?;
+                let e = elevation_object::<N>(o, &path, base, reader)?;
+                if e.holes > 0 {
+                    surface_warnings.push(format!(
+                        "objects[{i}]: left out {} grid cubes with a NaN corner (holes in the elevation map)",
+                        e.holes
+                    ));
+                }
+                values = Some(e.values);
+                own_normals = e.normals;
+                (e.mesh, None)
+            }
+            _ => {
+                reject_elevation_keys(o, &path)?;
+                (object_mesh::<N>(o, &path, base, reader)?, None)
+            }
         };
+        if let Some(v) = &o.values {
+            if v.len() != mesh.vertices.len() {
+                return Err(PathError::new(
+                    format!("{path}.values"),
+                    format!(
+                        "one value per vertex: the object has {} vertices, got {} values",
+                        mesh.vertices.len(),
+                        v.len()
+                    ),
+                ));
+            }
+            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+                return Err(PathError::new(
+                    format!("{path}.values[{k}]"),
+                    format!("must be finite, got {}", v[k]),
+                ));
+            }
+            values = Some(v.clone());
+        }
+        if let Some(spec) = &mat.texture {
+            if o.shape == ShapeKind::Surface {
+                return Err(PathError::new(
+                    format!("{path}.material"),
+                    "colormap, isolines and lattice are for simplex meshes, not surface objects",
+                ));
+            }
+            if spec.needs_values() && values.is_none() {
+                return Err(PathError::new(
+                    format!("{path}.values"),
+                    "material.colormap and material.isolines need one value per vertex: give values (an elevation map has its field)",
+                ));
+            }
+        }
         mesh.vertices
             .par_iter_mut()
             .for_each(|v| *v = add(&mat_vec(&a, v), &b));
@@ -660,14 +835,48 @@ pub fn build_with<const N: usize>(
                 ));
             }
         }
-        let vertex_normals =
-            (mat.smooth && surface.is_none()).then(|| shapes::vertex_normals(&mesh));
+        // Normals are covectors: they map by the inverse transpose, A^(−T) = cofactor(A)/det A.
+        let inverse_t = scale_matrix(&cofactor_matrix(&a), 1.0 / det(&a));
+        let vertex_normals = match own_normals {
+            Some(mut n) => {
+                n.par_iter_mut().for_each(|v| {
+                    let w = mat_vec(&inverse_t, v);
+                    *v = scale(&w, 1.0 / norm(&w));
+                });
+                Some(n)
+            }
+            None => (mat.smooth && surface.is_none()).then(|| shapes::vertex_normals(&mesh)),
+        };
+        let texture = mat.texture.as_ref().map(|spec| {
+            let colormap = spec.colormap.as_ref().map(|(map, range)| {
+                let range = range.unwrap_or_else(|| {
+                    let v = values.as_deref().unwrap_or(&[]);
+                    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+                    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    if hi > lo {
+                        [lo, hi]
+                    } else {
+                        [lo - 1.0, lo + 1.0]
+                    }
+                });
+                (map.clone(), range)
+            });
+            let inverse = transpose(&inverse_t);
+            crate::texture::Texture {
+                values: values.take(),
+                colormap,
+                isolines: spec.isolines.clone(),
+                lattice: spec.lattice.clone(),
+                to_object: (inverse, scale(&mat_vec(&inverse, &b), -1.0)),
+            }
+        });
         objects.push(Object {
             mesh,
             material: mat,
             vertex_normals,
             convex: None,
             surface,
+            texture,
         });
     }
     // 3. Prepared simplices and the BVH.

@@ -259,17 +259,21 @@ pub enum ShapeKind {
     /// A triangulated 2-surface in R^4 (`vertices`, `triangles`), rendered directly by the
     /// limit of circle-bundle thickening ("bear hair", [`crate::surface`]).
     Surface,
+    /// The 4D elevation map w = height·f(x, y, z) of a 3D scalar `field`
+    /// ([`crate::mesh::elevation`]).
+    Elevation,
 }
 
 impl ShapeKind {
     /// The names accepted in scene files.
-    pub const NAMES: [&'static str; 6] = [
+    pub const NAMES: [&'static str; 7] = [
         "mesh",
         "simplex",
         "hypercube",
         "cross_polytope",
         "sphere",
         "surface",
+        "elevation",
     ];
 }
 
@@ -298,12 +302,46 @@ pub struct ObjectDesc {
     /// Sphere: subdivision level (default 2).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub subdivisions: Option<u32>,
+    /// Elevation: the 3D scalar field, a file (`.npy`, `.npz` with `key`, `.nii`/`.nii.gz`
+    /// through nibabel) relative to the scene file, or inline nested lists indexed [x][y][z].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub field: Option<FieldDesc>,
+    /// Elevation: the array's name in an `.npz` field file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub key: Option<String>,
+    /// Elevation: the box [[x0, x1], [y0, y1], [z0, z1]] the grid spans (default: cubic voxels,
+    /// the longest side spanning [−1, 1], centred).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub extent: Option<Vec<Vec<f64>>>,
+    /// Elevation: w = height·f (default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<f64>,
+    /// Elevation: normals of the smooth graph, ∝ (−height·∇f, 1), instead of flat tetrahedra.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub smooth: Option<bool>,
+    /// One scalar per vertex, interpolated at the hit, for `material.colormap` and
+    /// `material.isolines` (an elevation map's default: its field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub values: Option<Vec<f64>>,
     /// Surface appearance.
     #[serde(default)]
     pub material: MaterialDesc,
     /// Transforms applied in order (the first entry acts first).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub transform: Vec<TransformDesc>,
+}
+
+/// An elevation map's field: a file name, or the values inline as nested lists [x][y][z].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(
+    untagged,
+    expecting = "expected a file name or a 3-D array of numbers (nested lists indexed [x][y][z])"
+)]
+pub enum FieldDesc {
+    /// A file relative to the scene file.
+    File(String),
+    /// Inline values.
+    Inline(Vec<Vec<Vec<f64>>>),
 }
 
 /// A reflection coefficient: one number or an RGB triple.
@@ -343,6 +381,47 @@ pub struct MaterialDesc {
     /// lies behind shows through the rest).
     #[serde(default = "one_f64", skip_serializing_if = "is_one")]
     pub opacity: f64,
+    /// Colour from the object's per-vertex `values` through a named colormap (matplotlib's
+    /// names, `_r` reversed), instead of `color`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub colormap: Option<String>,
+    /// The values mapped to the colormap's ends (default: the smallest and largest value).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub range: Option<Vec<f64>>,
+    /// Isosurface markings: bands where the interpolated `values` cross each given value.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub isolines: Option<IsolinesDesc>,
+    /// A cubic lattice texture on the object's own x, y, z coordinates.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lattice: Option<LatticeDesc>,
+}
+
+/// `material.isolines`: bands where the interpolated per-vertex values cross each of `values`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IsolinesDesc {
+    /// The values marked.
+    pub values: Vec<f64>,
+    /// Band width in world units along the object (default 0.03).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<f64>,
+    /// Band colour (default near-black).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<Vec<f64>>,
+}
+
+/// `material.lattice`: the planes x, y, z = k·spacing of the object's own space, as bands.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LatticeDesc {
+    /// Distance between planes.
+    pub spacing: f64,
+    /// Band width (default spacing / 12).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<f64>,
+    /// Band colour (default white).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<Vec<f64>>,
 }
 
 fn default_color() -> Vec<f64> {
@@ -374,6 +453,10 @@ impl Default for MaterialDesc {
             shininess: default_shininess(),
             smooth: false,
             opacity: 1.0,
+            colormap: None,
+            range: None,
+            isolines: None,
+            lattice: None,
         }
     }
 }

@@ -13,6 +13,15 @@ pub trait MeshReader: Sync {
     /// The arrays `[vertices (V, N), simplices (S, N)]` of the mesh in `path`, for a scene of
     /// dimension `dim`; an error says what is wrong (the caller adds the field and the path).
     fn read(&self, path: &Path, dim: usize) -> Result<[Array2; 2], String>;
+
+    /// The 3D scalar field in `path` (an elevation map's `field`: NIfTI `.nii`, `.nii.gz`, …),
+    /// indexed [x, y, z]; an error says what is wrong (the caller adds the field and the path).
+    fn read_field(&self, path: &Path) -> Result<super::npz::ArrayNd, String> {
+        Err(format!(
+            "{}: only .npy and .npz fields can be read here (the Python package reads NIfTI with nibabel)",
+            path.display()
+        ))
+    }
 }
 
 /// The mesh of `file` (relative to `base`) for the object at `path`.

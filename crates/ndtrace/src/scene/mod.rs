@@ -4,6 +4,7 @@
 pub mod animation;
 pub mod build;
 pub mod desc;
+mod elevation;
 pub mod errors;
 mod fields;
 pub mod mesh_file;

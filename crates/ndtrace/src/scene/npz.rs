@@ -60,8 +60,39 @@ pub fn read_npz(path: &Path, names: &[&str]) -> Result<Vec<Array2>, String> {
         .collect()
 }
 
+/// An array of any number of axes read from an `.npy`, converted to f64, in C order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArrayNd {
+    /// Lengths of its axes.
+    pub shape: Vec<usize>,
+    /// C-order (last axis fastest) data.
+    pub data: Vec<f64>,
+    /// Whether the stored dtype was an integer type.
+    pub integer: bool,
+    /// The stored dtype, as numpy writes it (e.g. `<f8`).
+    pub dtype: String,
+}
+
 /// Parses an `.npy` buffer holding a 2-D numeric array.
 pub fn parse_npy(bytes: &[u8]) -> Result<Array2, String> {
+    let a = parse_npy_nd(bytes)?;
+    match a.shape[..] {
+        [rows, cols] => Ok(Array2 {
+            shape: (rows, cols),
+            data: a.data,
+            integer: a.integer,
+        }),
+        _ => Err(format!(
+            "expected a 2-D array, got a {}-D array of shape {} (dtype {}); save it with shape (rows, columns), e.g. a.reshape(-1, dim)",
+            a.shape.len(),
+            shape_text(&a.shape.iter().map(|&d| d as u64).collect::<Vec<_>>()),
+            a.dtype
+        )),
+    }
+}
+
+/// Parses an `.npy` buffer holding a numeric array of any shape.
+pub fn parse_npy_nd(bytes: &[u8]) -> Result<ArrayNd, String> {
     // 1. The sizes the header claims, checked before npyz parses or allocates anything.
     let data_len = check_header(bytes)?;
     let npy = NpyFile::new(bytes).map_err(|e| format!("not a valid .npy array: {e}"))?;
@@ -69,19 +100,10 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Array2, String> {
     let shape = header.shape().to_vec();
     let dtype = header.dtype();
     let descr = dtype.descr();
-    let (rows, cols) = match shape[..] {
-        [r, c] => (
-            usize::try_from(r).map_err(|_| too_big(&shape))?,
-            usize::try_from(c).map_err(|_| too_big(&shape))?,
-        ),
-        _ => {
-            return Err(format!(
-                "expected a 2-D array, got a {}-D array of shape {} (dtype {descr}); save it with shape (rows, columns), e.g. a.reshape(-1, dim)",
-                shape.len(),
-                shape_text(&shape)
-            ))
-        }
-    };
+    let dims = shape
+        .iter()
+        .map(|&d| usize::try_from(d).map_err(|_| too_big(&shape)))
+        .collect::<Result<Vec<usize>, String>>()?;
     // 2. The element type: a scalar float, integer or bool.
     let unsupported = || {
         format!(
@@ -99,7 +121,10 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Array2, String> {
         _ => return Err(unsupported()),
     };
     // 3. The data must hold every element.
-    let count = rows.checked_mul(cols).ok_or_else(|| too_big(&shape))?;
+    let count = dims
+        .iter()
+        .try_fold(1usize, |c, &d| c.checked_mul(d))
+        .ok_or_else(|| too_big(&shape))?;
     let need = (count as u64)
         .checked_mul(width)
         .ok_or_else(|| too_big(&shape))?;
@@ -126,18 +151,84 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Array2, String> {
         _ => convert(npy.into_vec::<bool>(), |b| f64::from(u8::from(b))),
     }
     .map_err(read)?;
-    // 4. Fortran order stores columns one after the other: transpose to rows.
+    // 4. Fortran order stores the first axis fastest: reorder to C order.
     let data = match order {
         Order::C => values,
-        Order::Fortran => (0..count)
-            .map(|k| values[(k % cols) * rows + k / cols])
-            .collect(),
+        Order::Fortran => fortran_to_c(&values, &dims),
     };
-    Ok(Array2 {
-        shape: (rows, cols),
+    Ok(ArrayNd {
+        shape: dims,
         data,
         integer: matches!(ty.type_char(), TypeChar::Int | TypeChar::Uint),
+        dtype: descr,
     })
+}
+
+/// Reorders `values`, stored first axis fastest, to C order (last axis fastest).
+fn fortran_to_c(values: &[f64], dims: &[usize]) -> Vec<f64> {
+    // Fortran strides: 1, d0, d0·d1, …
+    let mut strides = vec![1usize; dims.len()];
+    for k in 1..dims.len() {
+        strides[k] = strides[k - 1] * dims[k - 1];
+    }
+    (0..values.len())
+        .map(|c| {
+            let (mut rest, mut f) = (c, 0);
+            for k in (0..dims.len()).rev() {
+                f += (rest % dims[k]) * strides[k];
+                rest /= dims[k];
+            }
+            values[f]
+        })
+        .collect()
+}
+
+/// Reads the array called `name` from an `.npz` archive, or its only array when `name` is
+/// `None`; errors name the file and list the arrays there are.
+pub fn read_npz_array(path: &Path, name: Option<&str>) -> Result<ArrayNd, String> {
+    let file =
+        std::fs::File::open(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+    let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
+        .map_err(|e| format!("{} is not an .npz (zip) archive: {e}", path.display()))?;
+    let arrays: Vec<String> = zip
+        .file_names()
+        .filter_map(|f| f.ok())
+        .filter_map(|f| f.strip_suffix(".npy").map(str::to_string))
+        .collect();
+    let name = match name {
+        Some(n) => n.to_string(),
+        None if arrays.len() == 1 => arrays[0].clone(),
+        None => {
+            return Err(format!(
+                "{} holds {} arrays ({}): say which with key",
+                path.display(),
+                arrays.len(),
+                arrays.join(", ")
+            ))
+        }
+    };
+    let entry = zip
+        .by_name(&npyz::npz::file_name_from_array_name(&name))
+        .map_err(|_| {
+            format!(
+                "{} has no array named \"{name}\" (arrays: {})",
+                path.display(),
+                arrays.join(", ")
+            )
+        })?;
+    let claimed = entry.size();
+    let mut bytes = Vec::new();
+    entry
+        .take(claimed)
+        .read_to_end(&mut bytes)
+        .map_err(|e| format!("{}: reading array \"{name}\": {e}", path.display()))?;
+    parse_npy_nd(&bytes).map_err(|e| format!("{}: array \"{name}\": {e}", path.display()))
+}
+
+/// Reads an `.npy` file; errors name the file.
+pub fn read_npy(path: &Path) -> Result<ArrayNd, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+    parse_npy_nd(&bytes).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 fn convert<T>(
