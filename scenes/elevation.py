@@ -1,43 +1,49 @@
-"""A Python scene script: the 3D scalar field w = 0.8·exp(−3 r²) on [−1, 1]³ as a 4D elevation
-map (course notes: "3D scalar fields as 4D elevation maps"), tessellated into tetrahedra.
+"""A Python scene script: a 3D scalar field seen as a 4D elevation map (course notes, Part
+II(B): "any volume-renderable 3D scalar field ... is indistinguishable mathematically from a 4D
+elevation map"). The field is a sum of three Gaussians of known centres, widths and heights,
+
+    f(x, y, z) = Σ_k a_k · exp(−|x − c_k|² / (2 σ_k²)),
+
+sampled on a 48³ grid over [−1, 1]³ and drawn as the hypersurface w = 0.6·f of R^4, lit by a
+light from a 4D direction so that its three bumps read by shading, coloured by f (viridis) with
+isosurface markings at f = 0.25, 0.5 and 0.75 (the course's "isosurface markings"). The
+picture is the retina (a 3D image of the terrain) with the octant toward the viewer cut away,
+beside three orthogonal sections through it.
 
 Render it with:  ndtrace scenes/elevation.py -o elevation.png
 """
-
-import itertools
 
 import numpy as np
 
 import ndtrace
 
+#: (centre, σ, amplitude) of each Gaussian.
+BUMPS = [((0.35, 0.2, -0.1), 0.30, 1.0), ((-0.45, -0.3, 0.2), 0.22, 0.7), ((0.0, 0.5, 0.5), 0.18, 0.5)]
 
-def elevation_mesh(n: int = 8):
-    """Vertices (x, y, z, f(x, y, z)) on an n³ grid, each cube split into 6 tetrahedra."""
-    axis = np.linspace(-1.0, 1.0, n + 1)
+
+def field(n: int = 48) -> np.ndarray:
+    """The field on an n³ grid over [−1, 1]³, indexed [x, y, z]."""
+    axis = np.linspace(-1.0, 1.0, n)
     x, y, z = np.meshgrid(axis, axis, axis, indexing="ij")
-    w = 0.8 * np.exp(-3.0 * (x**2 + y**2 + z**2))
-    vertices = np.stack([x, y, z, w], axis=-1).reshape(-1, 4)
-    index = np.arange((n + 1) ** 3).reshape(n + 1, n + 1, n + 1)
-    simplices = []
-    for i, j, k in itertools.product(range(n), repeat=3):
-        corner = np.array([i, j, k])
-        for perm in itertools.permutations(range(3)):  # Kuhn triangulation of each cube
-            p = corner.copy()
-            tet = [index[tuple(p)]]
-            for axis_ in perm:
-                p[axis_] += 1
-                tet.append(index[tuple(p)])
-            simplices.append(tet)
-    return vertices, np.array(simplices)
+    f = np.zeros_like(x)
+    for (cx, cy, cz), sigma, a in BUMPS:
+        f += a * np.exp(-((x - cx) ** 2 + (y - cy) ** 2 + (z - cz) ** 2) / (2 * sigma**2))
+    return f
 
 
 def scene() -> ndtrace.Scene:
-    vertices, simplices = elevation_mesh()
     return (
-        ndtrace.Scene(4, ambient=[0.15, 0.15, 0.18])
-        .set_camera([0.4, 0.6, 0.9, 3.5], look_at=[0, 0, 0, 0.3],
-                    up=[[0, 1, 0, 0], [0, 0, 1, 0]], fov=55, resolution=64)
-        .add_light("directional", direction=[0.2, 0.5, 0.3, 1.0])
-        .add_object("mesh", vertices=vertices, simplices=simplices,
-                    material={"color": [0.95, 0.5, 0.35], "specular": 0.2})
+        ndtrace.Scene(4, ambient=[0.2, 0.2, 0.22])
+        .set_camera([0.5, 0.7, 1.0, 3.2], look_at=[0, 0, 0, 0.25],
+                    up=[[0, 1, 0, 0], [0, 0, 1, 0]], fov=50, resolution=64)
+        .add_light("directional", direction=[0.9, 0.7, 0.3, 0.45])
+        .add_object("elevation", field=field(), height=0.6, smooth=True,
+                    material={"colormap": "coolwarm", "range": [-1.0, 1.0], "specular": 0.2,
+                              "isolines": {"values": [0.25, 0.5, 0.75], "width": 0.07,
+                                           "color": [0.05, 0.05, 0.2]}})
+        # The retina is a solid block (every ray meets the terrain): show it as an opaque
+        # volume with the octant toward the viewer cut away, beside three orthogonal sections,
+        # each a relief map of the terrain lit in 4D.
+        .set_composite(mode="volume", layout="sections",
+                       cutaway={"shape": "box", "min": [0, 0, -1.5], "max": [1.5, 1.5, 0]})
     )

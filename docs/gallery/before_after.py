@@ -1,7 +1,9 @@
 """Puts the gallery's 4D and 5D pictures beside what the same scenes gave before the
 illustrative composite (issue 19): docs/gallery/before/<name>.png (rendered at the earlier
 default, an opaque volume composite) above docs/gallery/<name>.png (now), in one strip,
-docs/gallery/before_after.png.
+docs/gallery/before_after.png; and the elevation map's three stages (issue 20: the opaque
+cube, the illustrative fog of a hand-built mesh, the elevation shape with colour, isolines,
+shadows, cutaway and sections) in docs/gallery/elevation_before_after.png.
 
     python docs/gallery/render_gallery.py && python docs/gallery/before_after.py
 """
@@ -26,6 +28,16 @@ def main() -> None:
     draw.text((4, 2 * TILE + 24), "top: before (opaque volume composite)   bottom: now (illustrative, exact 4D edges)",
               fill=(230, 230, 230))
     strip.save(os.path.join(HERE, "before_after.png"))
+
+    stages = [("before/elevation.png", "opaque volume"), ("before/elevation_issue19.png", "illustrative, a mesh"),
+              ("elevation.png", "elevation shape: colour, isolines, cutaway, sections"), ("mr_head.png", "a real MR volume")]
+    strip = Image.new("RGB", (TILE * len(stages), TILE + 24), (24, 24, 24))
+    draw = ImageDraw.Draw(strip)
+    for i, (path, label) in enumerate(stages):
+        tile = Image.open(os.path.join(HERE, path)).convert("RGB").resize((TILE, TILE), Image.LANCZOS)
+        strip.paste(tile, (i * TILE, 24))
+        draw.text((i * TILE + 6, 6), label, fill=(230, 230, 230))
+    strip.save(os.path.join(HERE, "elevation_before_after.png"))
 
 
 if __name__ == "__main__":

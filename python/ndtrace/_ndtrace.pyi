@@ -1,7 +1,7 @@
 """Type stubs of the compiled extension. Use the ``ndtrace`` package, not this module."""
 
 from types import ModuleType
-from typing import Callable
+from typing import Callable, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -96,7 +96,12 @@ class CompiledScene:
     def retina_edges(self, angle: float) -> npt.NDArray[np.float64]: ...
     def retina_camera(self) -> dict[str, object]: ...
 
-_MeshReader = Callable[[str, int], tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]]
+class _MeshReader(Protocol):
+    """``reader(path, dim)`` reads a mesh file; ``reader.field(path)`` a 3D field (NIfTI)."""
+    def __call__(
+        self, path: str, dim: int
+    ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]: ...
+    def field(self, path: str) -> npt.NDArray[np.float64]: ...
 
 def load_file(path: str, reader: _MeshReader | None = None) -> CompiledScene: ...
 def load_toml(
@@ -111,6 +116,9 @@ def load_dict(
 def orient_flips(
     vertices: npt.NDArray[np.float64], simplices: npt.NDArray[np.uint32]
 ) -> npt.NDArray[np.bool_]: ...
+def elevation_map(
+    field: npt.NDArray[np.float64], extent: list[list[float]] | None, height: float
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], int]: ...
 
 RENDER_MODES: tuple[str, ...]
 

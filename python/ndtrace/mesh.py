@@ -19,6 +19,7 @@ Every function takes and returns such a pair, so they compose::
     vertices, simplices = ndtrace.mesh.read("bunny.obj")               # meshio formats, .npz
     vertices, simplices = ndtrace.mesh.thicken_surface(v4, triangles, radius=0.05)  # a tube in R^4
     vertices, simplices = ndtrace.mesh.thicken_points(points4, radius=0.01)  # tiny 3-spheres
+    vertices, simplices = ndtrace.mesh.elevation_map(field, height=0.5)  # w = 0.5·f(x, y, z)
     scene.add_object("mesh", mesh=(vertices, simplices))               # or a trimesh / meshio mesh
 
 File formats: ``.npz`` archives with arrays ``vertices`` and ``simplices`` (any N, read by the
@@ -34,6 +35,7 @@ from __future__ import annotations
 import errno
 import numbers
 import os
+import warnings
 
 import numpy as np
 
@@ -41,8 +43,8 @@ from . import _ndtrace
 from .geometry import generalized_cross
 from .thicken import thicken_points, thicken_surface
 
-__all__ = ["convex_hull", "orient", "feature_edges", "read", "from_object", "thicken_surface",
-           "thicken_points", "CELL_TYPES"]
+__all__ = ["convex_hull", "orient", "feature_edges", "read", "read_field", "from_object",
+           "elevation_map", "thicken_surface", "thicken_points", "CELL_TYPES"]
 
 #: The meshio cell types that hold the (N−1)-simplices of a dimension-N scene ("quad" cells are
 #: split into two triangles).
@@ -52,10 +54,14 @@ _MESH_EXTRA = 'pip install "ndtrace[mesh]"'
 
 
 def _needs(package: str, what: str):
+    return _needs_extra(package, what, _MESH_EXTRA)
+
+
+def _needs_extra(package: str, what: str, extra: str):
     try:
         return __import__(package)
     except ImportError:
-        raise ImportError(f"{what} needs {package}: {_MESH_EXTRA}") from None
+        raise ImportError(f"{what} needs {package}: {extra}") from None
 
 
 def _vertices(name: str, vertices, dim: int | None = None) -> np.ndarray:
@@ -307,14 +313,116 @@ def read(path: str | os.PathLike, dim: int | None = None) -> tuple[np.ndarray, n
     return _from_cells(m.points, m.cells, dim, path)
 
 
-def _scene_reader(path: str, dim: int) -> tuple[np.ndarray, np.ndarray]:
-    """What the scene loaders call for a mesh file the core does not read itself (errors
-    become scene errors naming the field and the file)."""
-    try:
-        return read(path, dim)
-    except ValueError as e:
+class _SceneReader:
+    """What the scene loaders call for a file the core does not read itself: ``reader(path,
+    dim)`` for a mesh (meshio formats) and ``reader.field(path)`` for an elevation map's NIfTI
+    field. Errors become scene errors naming the field and the file."""
+
+    @staticmethod
+    def _strip(path: str, e: Exception) -> str:
         message = str(e)
-        raise ValueError(message[len(path) + 2:] if message.startswith(path + ": ") else message) from None
+        return message[len(path) + 2:] if message.startswith(path + ": ") else message
+
+    def __call__(self, path: str, dim: int) -> tuple[np.ndarray, np.ndarray]:
+        try:
+            return read(path, dim)
+        except ValueError as e:
+            raise ValueError(self._strip(path, e)) from None
+
+    def field(self, path: str) -> np.ndarray:
+        try:
+            return read_field(path)
+        except ValueError as e:
+            raise ValueError(self._strip(path, e)) from None
+
+
+_scene_reader = _SceneReader()
+
+
+def read_field(path: str | os.PathLike, key: str | None = None) -> np.ndarray:
+    """Reads a 3D scalar field, indexed ``[x, y, z]``, as a float64 array: ``.npy``, ``.npz``
+    (the array ``key``, or its only array) or NIfTI ``.nii`` / ``.nii.gz`` through nibabel
+    (``pip install "ndtrace[nifti]"``; the voxel array as stored, its affine ignored). Raises
+    FileNotFoundError for a missing file, ImportError naming the extra, ValueError otherwise."""
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise FileNotFoundError(errno.ENOENT, "no such field file", path)
+    lower = path.lower()
+    if lower.endswith((".nii", ".nii.gz")):
+        nibabel = _needs_extra("nibabel", "reading NIfTI fields", 'pip install "ndtrace[nifti]"')
+        try:
+            img = nibabel.load(path)
+            data = np.asanyarray(img.dataobj)
+        except Exception as e:  # noqa: BLE001 - nibabel raises many kinds; say which file
+            raise ValueError(f"{path}: nibabel cannot read it: {e}") from None
+        if data.ndim == 4 and data.shape[3] == 1:
+            data = data[..., 0]
+        return _field(path, data)
+    if lower.endswith(".npy"):
+        return _field(path, np.load(path, allow_pickle=False))
+    if lower.endswith(".npz"):
+        with np.load(path, allow_pickle=False) as z:
+            if key is None:
+                if len(z.files) != 1:
+                    raise ValueError(f"{path}: the .npz holds {len(z.files)} arrays "
+                                     f"({', '.join(z.files) or 'none'}): name one with key")
+                key = z.files[0]
+            if key not in z.files:
+                raise ValueError(f"{path}: the .npz has no array named {key!r} "
+                                 f"(arrays: {', '.join(z.files) or 'none'})")
+            return _field(path, z[key])
+    raise ValueError(f"{path}: not a field file: expected .npy, .npz, .nii or .nii.gz")
+
+
+def _field(name: str, field) -> np.ndarray:
+    f = np.asanyarray(field)
+    if isinstance(f, np.ma.MaskedArray):
+        f = f.astype(np.float64).filled(np.nan)
+    if f.dtype.kind not in "biuf":
+        raise ValueError(f"{name}: expected a numeric 3D array, got dtype {f.dtype}")
+    if f.ndim != 3:
+        raise ValueError(f"{name}: expected a 3D array indexed [x, y, z], got {f.ndim} "
+                         f"dimension{'s' if f.ndim != 1 else ''} (shape {f.shape})")
+    return np.ascontiguousarray(f, dtype=np.float64)
+
+
+def elevation_map(field, extent=None, height: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """The 4D elevation map of a 3D scalar field (course notes, Part II(B)): the graph
+    ``w = height·f(x, y, z)`` of ``field`` (a 3D array indexed ``[x, y, z]``, one value per
+    grid point) over the box ``extent = ((x0, x1), (y0, y1), (z0, z1))`` — by default the
+    longest side spans [−1, 1], centred, with cubic voxels.
+
+    Returns ``(vertices (V, 4) float64, simplices (S, 4) int64)``: one vertex per grid point,
+    ``w`` exactly ``height·field``, and six tetrahedra per grid cube (Kuhn's split, conforming
+    across cubes, so their projections to xyz tile the box with no gaps or overlaps), oriented
+    so that the normal's w component is positive. Cubes touching a NaN value (masked data) are
+    left out as holes, with a warning that counts them. Without holes vertex ``i`` is grid point
+    ``np.unravel_index(i, field.shape)``; with holes, the grid points no kept cube uses are
+    dropped and the others keep that order."""
+    f = _field("field", field)
+    if isinstance(height, bool) or not isinstance(height, numbers.Real):
+        raise ValueError(f"height: expected a number, got {height!r}")
+    box = None
+    if extent is not None:
+        try:
+            box = np.asarray(extent, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(f"extent: expected ((x0, x1), (y0, y1), (z0, z1)), got {extent!r}") from None
+        if box.shape != (3, 2):
+            raise ValueError(f"extent: expected ((x0, x1), (y0, y1), (z0, z1)), shape (3, 2), "
+                             f"got shape {box.shape}")
+        for axis, (lo, hi) in zip("xyz", box):
+            if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
+                raise ValueError(f"extent: the {axis} range [{lo:g}, {hi:g}] must be finite with "
+                                 f"{axis}1 > {axis}0")
+        box = [[float(a), float(b)] for a, b in box]
+    if not (np.isfinite(height) and height != 0):
+        raise ValueError(f"height: must be a finite non-zero number, got {height!r}")
+    vertices, simplices, holes = _ndtrace.elevation_map(f, box, float(height))
+    if holes:
+        warnings.warn(f"field: {holes} grid cube{'s' if holes != 1 else ''} touching NaN "
+                      f"values left out as holes", stacklevel=2)
+    return vertices, simplices
 
 
 def _angle(angle) -> float:

@@ -3,11 +3,11 @@
 //! `ndtrace.mesh.orient`.
 
 use crate::errors::guarded;
+use ndtrace::mesh::elevation::{self, Field};
 use ndtrace::mesh::orientation;
 use ndtrace::scene::npz::Array2;
-use ndtrace::scene::MeshReader;
-use ndtrace::mesh::elevation::{self, Field};
 use ndtrace::scene::npz::ArrayNd;
+use ndtrace::scene::MeshReader;
 use numpy::{
     PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
 };
@@ -121,7 +121,13 @@ fn elevation_map<'py>(
         })?
         .map_err(|e| pyo3::exceptions::PyValueError::new_err(format!("field: {e}")))?;
     let v: Vec<f64> = e.mesh.vertices.iter().flatten().copied().collect();
-    let s: Vec<i64> = e.mesh.simplices.iter().flatten().map(|&i| i64::from(i)).collect();
+    let s: Vec<i64> = e
+        .mesh
+        .simplices
+        .iter()
+        .flatten()
+        .map(|&i| i64::from(i))
+        .collect();
     let nv = e.mesh.vertices.len();
     let ns = e.mesh.simplices.len();
     Ok((

@@ -79,7 +79,9 @@ pub fn check(field: &Field<'_>, extent: Option<&Extent>, height: f64) -> Result<
         ));
     }
     if !height.is_finite() || height == 0.0 {
-        return Err(format!("height must be a finite non-zero number, got {height}"));
+        return Err(format!(
+            "height must be a finite non-zero number, got {height}"
+        ));
     }
     if let Some(e) = extent {
         for (axis, [lo, hi]) in ["x", "y", "z"].iter().zip(e) {
@@ -109,7 +111,9 @@ pub fn elevation_map<const N: usize>(
     }
     check(field, extent, height)?;
     let [nx, ny, nz] = field.shape;
-    let extent = extent.copied().unwrap_or_else(|| default_extent(field.shape));
+    let extent = extent
+        .copied()
+        .unwrap_or_else(|| default_extent(field.shape));
     let f = field.values;
     let at = |x: usize, y: usize, z: usize| (x * ny + y) * nz + z;
     // Which cubes are kept (all eight corners finite), by cube index.
@@ -117,7 +121,11 @@ pub fn elevation_map<const N: usize>(
     let keep: Vec<bool> = (0..cubes)
         .into_par_iter()
         .map(|c| {
-            let (x, y, z) = (c / ((ny - 1) * (nz - 1)), c / (nz - 1) % (ny - 1), c % (nz - 1));
+            let (x, y, z) = (
+                c / ((ny - 1) * (nz - 1)),
+                c / (nz - 1) % (ny - 1),
+                c % (nz - 1),
+            );
             CORNERS
                 .iter()
                 .all(|&[dx, dy, dz]| !f[at(x + dx, y + dy, z + dz)].is_nan())
@@ -133,7 +141,11 @@ pub fn elevation_map<const N: usize>(
     let used: Option<Vec<u32>> = (kept < cubes || f.iter().any(|v| v.is_nan())).then(|| {
         let mut used = vec![false; f.len()];
         for (c, _) in keep.iter().enumerate().filter(|(_, &k)| k) {
-            let (x, y, z) = (c / ((ny - 1) * (nz - 1)), c / (nz - 1) % (ny - 1), c % (nz - 1));
+            let (x, y, z) = (
+                c / ((ny - 1) * (nz - 1)),
+                c / (nz - 1) % (ny - 1),
+                c % (nz - 1),
+            );
             for &[dx, dy, dz] in &CORNERS {
                 used[at(x + dx, y + dy, z + dz)] = true;
             }
@@ -188,7 +200,11 @@ pub fn elevation_map<const N: usize>(
     let simplices: Vec<[u32; N]> = kept_cubes
         .par_iter()
         .flat_map_iter(|&c| {
-            let (x, y, z) = (c / ((ny - 1) * (nz - 1)), c / (nz - 1) % (ny - 1), c % (nz - 1));
+            let (x, y, z) = (
+                c / ((ny - 1) * (nz - 1)),
+                c / (nz - 1) % (ny - 1),
+                c % (nz - 1),
+            );
             KUHN.iter().map(move |path| {
                 std::array::from_fn(|k| {
                     let [dx, dy, dz] = path[k.min(3)];
@@ -221,8 +237,9 @@ pub fn gradient_normals<const N: usize>(
     let [nx, ny, nz] = field.shape;
     let f = field.values;
     let strides = [ny * nz, nz, 1];
-    let steps: [f64; 3] =
-        std::array::from_fn(|a| (elev.extent[a][1] - elev.extent[a][0]) / (field.shape[a] - 1) as f64);
+    let steps: [f64; 3] = std::array::from_fn(|a| {
+        (elev.extent[a][1] - elev.extent[a][0]) / (field.shape[a] - 1) as f64
+    });
     elev.grid
         .par_iter()
         .map(|&g| {

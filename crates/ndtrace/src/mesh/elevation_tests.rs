@@ -37,7 +37,11 @@ fn vertices_are_the_grid_and_w_is_exactly_height_times_f() {
         let (x, y, z) = (g / 20, g / 5 % 4, g % 5);
         assert_eq!(v[3], 0.7 * f[g]);
         assert_eq!(e.values[g], f[g]);
-        let expect = [-0.5 + 0.5 * x as f64, -0.75 + 0.5 * y as f64, -1.0 + 0.5 * z as f64];
+        let expect = [
+            -0.5 + 0.5 * x as f64,
+            -0.75 + 0.5 * y as f64,
+            -1.0 + 0.5 * z as f64,
+        ];
         for k in 0..3 {
             assert!((v[k] - expect[k]).abs() < 1e-15, "{v:?} {expect:?}");
         }
@@ -153,18 +157,48 @@ fn nan_cubes_are_holes_and_unused_vertices_are_dropped() {
 #[test]
 fn bad_fields_are_refused_with_what_is_wrong() {
     let f = vec![0.0; 8];
-    let field = Field { values: &f, shape: [2, 2, 2] };
+    let field = Field {
+        values: &f,
+        shape: [2, 2, 2],
+    };
     let err = |e: Result<Elevation<4>, String>| e.unwrap_err();
-    assert!(err(elevation_map(&Field { values: &f, shape: [1, 2, 4] }, None, 1.0))
-        .contains("at least 2 grid points"));
-    assert!(err(elevation_map(&Field { values: &f, shape: [2, 2, 3] }, None, 1.0))
-        .contains("needs 12 values, got 8"));
-    assert!(err(elevation_map(&field, Some(&[[0.0, 1.0], [1.0, 1.0], [0.0, 1.0]]), 1.0))
-        .contains("y range [1, 1]"));
+    assert!(err(elevation_map(
+        &Field {
+            values: &f,
+            shape: [1, 2, 4]
+        },
+        None,
+        1.0
+    ))
+    .contains("at least 2 grid points"));
+    assert!(err(elevation_map(
+        &Field {
+            values: &f,
+            shape: [2, 2, 3]
+        },
+        None,
+        1.0
+    ))
+    .contains("needs 12 values, got 8"));
+    assert!(err(elevation_map(
+        &field,
+        Some(&[[0.0, 1.0], [1.0, 1.0], [0.0, 1.0]]),
+        1.0
+    ))
+    .contains("y range [1, 1]"));
     assert!(err(elevation_map(&field, None, f64::NAN)).contains("height"));
     let mut g = f.clone();
     g[5] = f64::INFINITY;
-    assert!(err(elevation_map(&Field { values: &g, shape: [2, 2, 2] }, None, 1.0))
-        .contains("field[1, 0, 1] is inf"));
-    assert!(elevation_map::<5>(&field, None, 1.0).unwrap_err().contains("dim = 4"));
+    assert!(err(elevation_map(
+        &Field {
+            values: &g,
+            shape: [2, 2, 2]
+        },
+        None,
+        1.0
+    ))
+    .contains("field[1, 0, 1] is inf"));
+    assert!(elevation_map::<5>(&field, None, 1.0)
+        .unwrap_err()
+        .contains("dim = 4"));
 }

@@ -138,21 +138,31 @@ impl<const N: usize> GroupTracer<N> {
                     // Terms are summed in light order: directly until one waits for its shadow
                     // ray, then after the shadow pass.
                     let mut waiting = false;
-                    light_terms(scene, ray, dir_len, hit, obj, sh, &diffuse, &n, |l, color, shadow| {
-                        if shadow.is_none() && !waiting {
-                            for k in 0..3 {
-                                c[k] += color[k];
+                    light_terms(
+                        scene,
+                        ray,
+                        dir_len,
+                        hit,
+                        obj,
+                        sh,
+                        &diffuse,
+                        &n,
+                        |l, color, shadow| {
+                            if shadow.is_none() && !waiting {
+                                for k in 0..3 {
+                                    c[k] += color[k];
+                                }
+                                return;
                             }
-                            return;
-                        }
-                        waiting = true;
-                        if let Some(shadow) = shadow {
-                            requests.push((l, self.terms.len(), shadow));
-                        }
-                        // Set to the shadow ray's index once the rays are in light order.
-                        self.shadow.push(None);
-                        self.terms.push((r, color));
-                    });
+                            waiting = true;
+                            if let Some(shadow) = shadow {
+                                requests.push((l, self.terms.len(), shadow));
+                            }
+                            // Set to the shadow ray's index once the rays are in light order.
+                            self.shadow.push(None);
+                            self.terms.push((r, color));
+                        },
+                    );
                     c
                 }
                 RenderMode::Depth => {

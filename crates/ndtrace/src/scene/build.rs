@@ -2,6 +2,7 @@
 //! generated shapes, object transforms, materials, lights, the camera and the BVH.
 
 use super::desc::*;
+use super::elevation::{elevation_object, reject_elevation_keys};
 use super::errors::PathError;
 pub use super::fields::Rgb;
 use super::fields::{coefficient, matrix_rows, mesh_from_rows, rgb, vec_n, R};
@@ -9,7 +10,6 @@ use super::mesh_file::{orientation_warning, read_mesh, MeshReader};
 use super::transform::transform;
 use crate::accel::{Bvh, PreparedSimplex};
 use crate::camera::{look_at_orientation, Camera};
-use super::elevation::{elevation_object, reject_elevation_keys};
 use crate::linalg::{
     add, cofactor_matrix, det, dot, identity, mat_mul, mat_vec, norm, scale, transpose, Matrix,
     Vector,
@@ -580,7 +580,9 @@ fn texture_spec(m: &MaterialDesc, path: &str) -> R<Option<crate::texture::Textur
                     _ => {
                         return Err(PathError::new(
                             format!("{path}.range"),
-                            format!("expected [low, high], two different finite numbers, got {r:?}"),
+                            format!(
+                                "expected [low, high], two different finite numbers, got {r:?}"
+                            ),
                         ))
                     }
                 },
@@ -638,11 +640,13 @@ fn texture_spec(m: &MaterialDesc, path: &str) -> R<Option<crate::texture::Textur
             })
         }
     };
-    Ok((colormap.is_some() || isolines.is_some() || lattice.is_some()).then_some(TextureSpec {
-        colormap,
-        isolines,
-        lattice,
-    }))
+    Ok(
+        (colormap.is_some() || isolines.is_some() || lattice.is_some()).then_some(TextureSpec {
+            colormap,
+            isolines,
+            lattice,
+        }),
+    )
 }
 
 fn light<const N: usize>(l: &LightDesc, path: &str) -> R<Light<N>> {

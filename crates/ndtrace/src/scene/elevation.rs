@@ -48,7 +48,11 @@ pub(crate) fn reject_elevation_keys(o: &ObjectDesc, path: &str) -> R<()> {
                 format!(
                     "\"{key}\" is used by shape \"elevation\" only, not \"{}\"{}",
                     ShapeKind::NAMES[o.shape as usize],
-                    if key == "smooth" { " (smooth shading of a mesh: material.smooth)" } else { "" }
+                    if key == "smooth" {
+                        " (smooth shading of a mesh: material.smooth)"
+                    } else {
+                        ""
+                    }
                 ),
             ));
         }
@@ -79,7 +83,12 @@ pub(crate) fn elevation_object<const N: usize>(
     }
     let fpath = format!("{path}.field");
     let (values, shape) = match &o.field {
-        None => return Err(PathError::new(path, "an elevation map needs a field (a file or a 3-D array)")),
+        None => {
+            return Err(PathError::new(
+                path,
+                "an elevation map needs a field (a file or a 3-D array)",
+            ))
+        }
         Some(FieldDesc::Inline(x)) => inline(x, &fpath)?,
         Some(FieldDesc::File(file)) => {
             let full = match base {
@@ -104,7 +113,8 @@ pub(crate) fn elevation_object<const N: usize>(
             (a.data, [nx, ny, nz])
         }
     };
-    if o.key.is_some() && !matches!(&o.field, Some(FieldDesc::File(f)) if f.to_ascii_lowercase().ends_with(".npz"))
+    if o.key.is_some()
+        && !matches!(&o.field, Some(FieldDesc::File(f)) if f.to_ascii_lowercase().ends_with(".npz"))
     {
         return Err(PathError::new(
             format!("{path}.key"),

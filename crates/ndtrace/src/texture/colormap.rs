@@ -48,7 +48,11 @@ fn all() -> &'static [Colormap] {
                 let values: Vec<f64> = words
                     .map(|w| w.parse().expect("colormaps.txt: not a number"))
                     .collect();
-                assert_eq!(values.len(), 768, "colormaps.txt: {name} needs 256 RGB triples");
+                assert_eq!(
+                    values.len(),
+                    768,
+                    "colormaps.txt: {name} needs 256 RGB triples"
+                );
                 Colormap {
                     name,
                     table: values

@@ -131,7 +131,13 @@ pub fn value_gradient_norm<const N: usize>(mesh: &Mesh<N>, local: usize, vals: &
     let p = mesh.simplex_points(local);
     let idx = &mesh.simplices[local];
     let m = N - 1;
-    let e: [Vector<N>; N] = std::array::from_fn(|k| if k < m { sub(&p[k + 1], &p[0]) } else { [0.0; N] });
+    let e: [Vector<N>; N] = std::array::from_fn(|k| {
+        if k < m {
+            sub(&p[k + 1], &p[0])
+        } else {
+            [0.0; N]
+        }
+    });
     let mut gram: Matrix<N> = [[0.0; N]; N];
     let mut delta: Vector<N> = [0.0; N];
     for i in 0..m {

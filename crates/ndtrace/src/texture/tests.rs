@@ -1,7 +1,7 @@
 use super::*;
 use crate::linalg::{add_scaled, norm};
-use crate::testutil::{random_vector, rng};
 use crate::testutil::for_each_dim;
+use crate::testutil::{random_vector, rng};
 
 #[test]
 fn colormaps_are_matplotlibs_tables_in_linear_rgb() {
@@ -15,13 +15,19 @@ fn colormaps_are_matplotlibs_tables_in_linear_rgb() {
     assert!((v.at(1.0)[1] - lin(0.906157)).abs() < 1e-6);
     // Interpolated between entries, clamped outside [0, 1].
     let mid: [f64; 3] = std::array::from_fn(|c| 0.5 * (v.table[0][c] + v.table[1][c]));
-    assert!(v.at(0.5 / 255.0).iter().zip(&mid).all(|(a, b)| (a - b).abs() < 1e-12));
+    assert!(v
+        .at(0.5 / 255.0)
+        .iter()
+        .zip(&mid)
+        .all(|(a, b)| (a - b).abs() < 1e-12));
     assert_eq!(v.at(-3.0), v.at(0.0));
     assert_eq!(v.at(7.0), v.at(1.0));
     let r = colormap::get("viridis_r").unwrap();
     assert_eq!(r.at(0.0), v.at(1.0));
     assert!(colormap::get("no_such_map").is_none());
-    for name in ["plasma", "inferno", "magma", "cividis", "turbo", "terrain", "gray", "coolwarm"] {
+    for name in [
+        "plasma", "inferno", "magma", "cividis", "turbo", "terrain", "gray", "coolwarm",
+    ] {
         assert!(colormap::names().contains(&name), "{name}");
     }
     // gray is the identity in sRGB.
@@ -53,7 +59,11 @@ fn the_value_gradient_is_the_steepest_slope_along_the_simplex() {
             }
             a[N - 1] = n;
             let big = crate::linalg::solve_block(a, rhs, N).unwrap();
-            assert!((norm(&big) - g).abs() <= 1e-9 * g, "N = {N}: {} vs {g}", norm(&big));
+            assert!(
+                (norm(&big) - g).abs() <= 1e-9 * g,
+                "N = {N}: {} vs {g}",
+                norm(&big)
+            );
             // And no direction within the simplex is steeper.
             for _ in 0..2000 {
                 let c = random_vector::<N>(&mut r, 1.0);
@@ -74,7 +84,12 @@ fn the_value_gradient_is_the_steepest_slope_along_the_simplex() {
 fn isolines_and_the_lattice_fall_where_they_should() {
     // One tetrahedron of R^4 in the hyperplane w = 0 with value v = x.
     let mesh = Mesh::<4> {
-        vertices: vec![[0.0; 4], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]],
+        vertices: vec![
+            [0.0; 4],
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ],
         simplices: vec![[0, 1, 2, 3]],
     };
     let base = [0.5, 0.5, 0.5];
@@ -82,7 +97,11 @@ fn isolines_and_the_lattice_fall_where_they_should() {
     let t = Texture::<4> {
         values: Some(vec![0.0, 1.0, 0.0, 0.0]),
         colormap: None,
-        isolines: Some(Isolines { values: vec![0.3], width: 0.1, color: [1.0, 0.0, 0.0] }),
+        isolines: Some(Isolines {
+            values: vec![0.3],
+            width: 0.1,
+            color: [1.0, 0.0, 0.0],
+        }),
         lattice: None,
         to_object: ident,
     };
@@ -95,7 +114,14 @@ fn isolines_and_the_lattice_fall_where_they_should() {
     assert_eq!(at(&t, 0.36, 0.1, 0.1), base);
     assert_eq!(at(&t, 0.2, 0.1, 0.1), base);
     // Doubling the scalar halves the band's width in value but not along the object.
-    let t2 = Texture { values: Some(vec![0.0, 2.0, 0.0, 0.0]), isolines: Some(Isolines { values: vec![0.6], ..t.isolines.clone().unwrap() }), ..t.clone() };
+    let t2 = Texture {
+        values: Some(vec![0.0, 2.0, 0.0, 0.0]),
+        isolines: Some(Isolines {
+            values: vec![0.6],
+            ..t.isolines.clone().unwrap()
+        }),
+        ..t.clone()
+    };
     assert_eq!(at(&t2, 0.34, 0.1, 0.1), [1.0, 0.0, 0.0]);
     assert_eq!(at(&t2, 0.36, 0.1, 0.1), base);
     // A lattice of spacing 0.25 and width 0.02, in object space: the object was moved by +0.1
@@ -103,7 +129,11 @@ fn isolines_and_the_lattice_fall_where_they_should() {
     let lat = Texture::<4> {
         values: None,
         isolines: None,
-        lattice: Some(Lattice { spacing: 0.25, width: 0.02, color: [0.0, 0.0, 1.0] }),
+        lattice: Some(Lattice {
+            spacing: 0.25,
+            width: 0.02,
+            color: [0.0, 0.0, 1.0],
+        }),
         to_object: (crate::linalg::identity::<4>(), [0.0, -0.1, 0.0, 0.0]),
         ..t.clone()
     };
