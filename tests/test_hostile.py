@@ -96,6 +96,34 @@ def test_readers_under_a_4_gb_address_space_limit_raise_cleanly():
     assert "RLIMIT_AS" in lines[2] and "camera.resolution" in lines[3], p.stdout
 
 
+def test_big_generated_shapes_and_fields_are_refused_before_they_are_built():
+    # The scene fuzzer's first finding: `sphere subdivisions = 6` in 4D (12 582 912 simplices) under
+    # a small memory cap ran for minutes building what the cap could not hold. The mesh and its
+    # BVH are now counted against the guard before any of it is generated, as is an elevation
+    # map's field; both refusals name the key.
+    p = subprocess.run([sys.executable, "-c", textwrap.dedent("""
+        import time
+        import numpy as np
+        import ndtrace
+        cam = {"position": [0, 0, 0, 4], "look_at": [0, 0, 0, 0], "up": [[0, 1, 0, 0], [0, 0, 1, 0]],
+               "fov": 50, "resolution": 8}
+        for obj in ({"shape": "sphere", "subdivisions": 6},
+                    {"shape": "elevation", "field": np.zeros((64, 64, 64))}):
+            t = time.perf_counter()
+            try:
+                ndtrace.load_dict({"dim": 4, "camera": cam, "objects": [obj]})
+                print("built")
+            except ValueError as e:
+                print(f"refused in {time.perf_counter() - t:.1f} s:", e)
+    """)], capture_output=True, text=True, cwd=ROOT, timeout=120,
+        env={**os.environ, "NDTRACE_MEMORY_LIMIT": "64M"})
+    assert p.returncode == 0, p.stderr
+    lines = p.stdout.splitlines()
+    assert len(lines) == 2 and all(l.startswith("refused") for l in lines), p.stdout
+    assert "objects[0].subdivisions" in lines[0] and "a sphere of 12582912 simplices" in lines[0], p.stdout
+    assert "objects[0]: an elevation map of 262144 grid points" in lines[1] and "NDTRACE_MEMORY_LIMIT" in lines[1], p.stdout
+
+
 def test_retina_exr_files_are_byte_reproducible(tmp_path):
     # The exr crate writes custom attributes in HashMap order; ndtrace sorts them, so two
     # processes (different hash seeds) write the same bytes.

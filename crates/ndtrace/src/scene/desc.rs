@@ -303,7 +303,7 @@ pub struct ObjectDesc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub subdivisions: Option<u32>,
     /// Elevation: the 3D scalar field, a file (`.npy`, `.npz` with `key`, `.nii`/`.nii.gz`
-    /// through nibabel) relative to the scene file, or inline nested lists indexed [x][y][z].
+    /// through nibabel) relative to the scene file, or inline nested lists indexed `[x][y][z]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub field: Option<FieldDesc>,
     /// Elevation: the array's name in an `.npz` field file.
@@ -331,7 +331,7 @@ pub struct ObjectDesc {
     pub transform: Vec<TransformDesc>,
 }
 
-/// An elevation map's field: a file name, or the values inline as nested lists [x][y][z].
+/// An elevation map's field: a file name, or the values inline as nested lists `[x][y][z]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(
     untagged,
