@@ -157,15 +157,7 @@ fn culled<const N: usize>(scene: &Scene<N>) -> Vec<bool> {
     if !scene.render.cull_backfaces {
         return Vec::new();
     }
-    (0..scene.flat_normals.len())
-        .into_par_iter()
-        .map(|g| {
-            let (o, s) = scene.locate(g as u32);
-            let obj = &scene.objects[o];
-            let x0 = obj.mesh.vertices[obj.mesh.simplices[s][0] as usize];
-            dot(&scene.flat_normals[g], &scene.camera.toward_eye(&x0)) < 0.0
-        })
-        .collect()
+    scene.backfaces()
 }
 
 fn lerp<const N: usize>(a: &Vector<N>, b: &Vector<N>, s: f64) -> Vector<N> {
@@ -379,7 +371,7 @@ fn split_edge<const N: usize>(
     };
     for &g in near {
         if accept(g) {
-            if let Some(h) = plane.hidden_by(&simplex(g), &scene.flat_normals[g as usize]) {
+            if let Some(h) = plane.hidden_by(&simplex(g), &scene.flat_normal(g)) {
                 hidden.push(h);
             }
         }

@@ -67,6 +67,31 @@ fn edges<const N: usize>(points: &[Vector<N>], out: &mut [Vector<N>]) {
 /// If `edges.len() != N − 1` (a programming error; the batch layer checks shapes).
 pub fn generalized_cross<const N: usize>(edges: &[Vector<N>]) -> Vector<N> {
     assert_eq!(edges.len(), N - 1, "generalized_cross needs N−1 edges");
+    // In 3D and 4D the cofactors written out (the same expansion, without the pivoted
+    // eliminations of the minors: the prepared simplices of big meshes spend their time here).
+    if N == 3 {
+        let (a, b) = (&edges[0], &edges[1]);
+        return std::array::from_fn(|i| {
+            let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+            a[j] * b[k] - a[k] * b[j]
+        });
+    }
+    if N == 4 {
+        let (a, b, c) = (&edges[0], &edges[1], &edges[2]);
+        // det of rows r of E = [a b c], expanded along its first column.
+        let det3 = |r: [usize; 3]| {
+            a[r[0]] * (b[r[1]] * c[r[2]] - b[r[2]] * c[r[1]])
+                - a[r[1]] * (b[r[0]] * c[r[2]] - b[r[2]] * c[r[0]])
+                + a[r[2]] * (b[r[0]] * c[r[1]] - b[r[1]] * c[r[0]])
+        };
+        let n = [
+            -det3([1, 2, 3]),
+            det3([0, 2, 3]),
+            -det3([0, 1, 3]),
+            det3([0, 1, 2]),
+        ];
+        return std::array::from_fn(|i| n[i]);
+    }
     // E with the edges as its first N−1 columns; column N is the slot of the unit vectors.
     let mut e: Matrix<N> = [[0.0; N]; N];
     for (c, edge) in edges.iter().enumerate() {
@@ -167,7 +192,13 @@ pub fn hyperplane<const N: usize>(points: &[Vector<N>]) -> Result<Hyperplane<N>,
 fn unit_edges<const N: usize>(points: &[Vector<N>], out: &mut [Vector<N>]) -> Option<()> {
     edges(points, out);
     for e in out.iter_mut() {
-        // Scale by the largest component first so that |e| neither overflows nor underflows.
+        // |e|² of moderate size: one square root (the common case, and the cheap one).
+        let n2 = dot(e, e);
+        if (1e-280..1e280).contains(&n2) {
+            *e = scale(e, 1.0 / n2.sqrt());
+            continue;
+        }
+        // Else scale by the largest component first so that |e| neither overflows nor underflows.
         let m = e.iter().fold(0.0f64, |a, x| a.max(x.abs()));
         if !(m > 0.0 && m.is_finite()) {
             return None;

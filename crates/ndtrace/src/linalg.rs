@@ -144,11 +144,28 @@ pub fn cofactor_matrix<const N: usize>(m: &Matrix<N>) -> Matrix<N> {
 /// Solves the leading `k × k` system `a·x = b` by Gaussian elimination with partial pivoting.
 /// Returns `None` when a pivot is exactly zero. Only the first `k` entries of the result are
 /// meaningful.
-pub fn solve_block<const N: usize>(
+pub fn solve_block<const N: usize>(a: Matrix<N>, b: Vector<N>, k: usize) -> Option<Vector<N>> {
+    let x = solve_many(a, b.map(|v| [v]), k)?;
+    Some(std::array::from_fn(|r| x[0][r]))
+}
+
+/// The inverse of the leading `k × k` block of `a`, by the eliminations of [`solve_block`]
+/// done once for the k right-hand sides ê_0 … ê_{k−1} together: row j of the result holds, bit
+/// for bit, `solve_block(a, ê_j, k)`. `None` when a pivot is exactly zero.
+pub fn inverse_rows_block<const N: usize>(a: Matrix<N>, k: usize) -> Option<Matrix<N>> {
+    let unit = std::array::from_fn(|r| std::array::from_fn(|j| f64::from(r == j)));
+    solve_many(a, unit, k)
+}
+
+/// Gaussian elimination with partial pivoting of the leading `k × k` block of `a` for M
+/// right-hand sides at once (`b[r][j]`: entry r of right-hand side j); row j of the result
+/// is solution j. Each right-hand side undergoes exactly the operations a lone solve gives it.
+fn solve_many<const N: usize, const M: usize>(
     mut a: Matrix<N>,
-    mut b: Vector<N>,
+    mut b: [[f64; M]; N],
     k: usize,
-) -> Option<Vector<N>> {
+) -> Option<[[f64; N]; M]> {
+    let m = M.min(k.max(1));
     for col in 0..k {
         let mut p = col;
         for r in col + 1..k {
@@ -167,17 +184,21 @@ pub fn solve_block<const N: usize>(
                 for c in col..k {
                     a[r][c] -= f * a[col][c];
                 }
-                b[r] -= f * b[col];
+                for j in 0..m {
+                    b[r][j] -= f * b[col][j];
+                }
             }
         }
     }
-    let mut x = [0.0; N];
-    for r in (0..k).rev() {
-        let mut s = b[r];
-        for c in r + 1..k {
-            s -= a[r][c] * x[c];
+    let mut x = [[0.0; N]; M];
+    for j in 0..m {
+        for r in (0..k).rev() {
+            let mut s = b[r][j];
+            for c in r + 1..k {
+                s -= a[r][c] * x[j][c];
+            }
+            x[j][r] = s / a[r][r];
         }
-        x[r] = s / a[r][r];
     }
     Some(x)
 }
@@ -201,6 +222,17 @@ mod tests {
             let y = solve_block(a, b, N).unwrap();
             for i in 0..N {
                 assert!((x[i] - y[i]).abs() < 1e-8, "N={N}: solve {x:?} vs {y:?}");
+            }
+            // The rows of inverse_rows_block are solve_block's solutions for the unit vectors,
+            // bit for bit, in every leading block.
+            for k in 1..=N {
+                let inv = inverse_rows_block(a, k).unwrap();
+                for j in 0..k {
+                    let mut unit = [0.0; N];
+                    unit[j] = 1.0;
+                    let y = solve_block(a, unit, k).unwrap();
+                    assert_eq!(inv[j][..k], y[..k], "N={N}, k={k}, row {j}");
+                }
             }
             // det(a)·a^(−1) = adj(a) = cof(a)^T, so a · cof(a)^T = det(a)·I.
             let d = det(&a);
@@ -228,5 +260,6 @@ mod tests {
         let a: Matrix<3> = [[1., 2., 3.], [2., 4., 6.], [0., 0., 1.]];
         assert_eq!(det(&a), 0.0);
         assert!(solve_block(a, [1., 2., 3.], 3).is_none());
+        assert!(inverse_rows_block(a, 3).is_none());
     }
 }

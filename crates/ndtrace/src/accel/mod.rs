@@ -31,6 +31,11 @@
 //! split or the tree gets deep. The build is parallel (rayon) for large inputs and produces the
 //! same tree for any number of threads.
 //!
+//! Very large inputs (the scene build switches at [`MORTON_MIN`] simplices) skip the SAH and the
+//! collapse: [`Bvh::build_morton`] sorts the simplices along a Morton curve, packs runs of 4
+//! into blocks and groups the blocks 8 to a node by the leading bits of their codes
+//! (`morton.rs`): linear work, and no memory per simplex beyond the finished tree's.
+//!
 //! ## 3. Wide collapse (`collapse.rs`)
 //! The binary tree is collapsed into an 8-wide tree by the optimal collapse of Ylitie, Karras and
 //! Laine (a dynamic program that minimises the summed boundary measure of the wide nodes). The
@@ -66,6 +71,8 @@
 mod simplex;
 // 2. The SAH build, and the public constructors.
 mod build;
+// 2b. The Morton build, for very large inputs.
+mod morton;
 // 3. The wide collapse.
 mod collapse;
 // 4. The queries.
@@ -82,6 +89,7 @@ mod tests;
 /// The ray and hit types of the queries, re-exported from [`crate::ray`].
 pub use crate::ray::{Hit, Ray};
 pub(crate) use build::BOX_PAD;
+pub use morton::MORTON_MIN;
 pub use packet::PACKET;
 pub use simplex::{simplex_bounds, Bounds, PreparedSimplex, BARY_SLACK};
 #[cfg(feature = "traversal-stats")]

@@ -3,7 +3,7 @@
 //! this arithmetic lane by lane (see `kernels`).
 
 use crate::geometry::{hyperplane, DEGENERACY_TOLERANCE};
-use crate::linalg::{dot, solve_block, sub, Matrix, Vector};
+use crate::linalg::{dot, inverse_rows_block, sub, Matrix, Vector};
 use crate::ray::Ray;
 
 /// Slack of the barycentric inside test: a hit needs `t_k ≥ −BARY_SLACK` for every k.
@@ -74,11 +74,9 @@ impl<const N: usize> PreparedSimplex<N> {
         }
         let mut m: Matrix<N> = [[0.0; N]; N];
         m[0] = plane.normal;
-        for a in 0..k {
-            // Row a of G⁻¹ (G is symmetric, so it is also column a): G·y = ê_a.
-            let mut unit = [0.0; N];
-            unit[a] = 1.0;
-            let y = solve_block(g, unit, k)?;
+        // Row a of G⁻¹ (G is symmetric, so it is also column a) solves G·y = ê_a.
+        let g_inv = inverse_rows_block(g, k)?;
+        for (a, y) in g_inv.iter().enumerate().take(k) {
             // r_a = Σ_b (G⁻¹)_ab e_b: row a of (EᵀE)⁻¹Eᵀ, so that r_a·e_b = δ_ab and r_a ⊥ n̂.
             let mut r = [0.0; N];
             for b in 0..k {

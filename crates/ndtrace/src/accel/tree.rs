@@ -180,6 +180,26 @@ impl<const N: usize> Bvh<N> {
             + self.blocks.len() * std::mem::size_of::<LeafBlock<N>>()
     }
 
+    /// Where each id `0..count` lies: `block · BLOCK_WIDTH + lane`, or `u32::MAX` for an id the
+    /// tree does not hold (a degenerate simplex). For trees whose ids are below `count`.
+    pub fn id_slots(&self, count: usize) -> Vec<u32> {
+        let mut slots = vec![u32::MAX; count];
+        for (b, block) in self.blocks.iter().enumerate() {
+            for (l, &id) in block.ids[..block.count as usize].iter().enumerate() {
+                slots[id as usize] = (b * BLOCK_WIDTH + l) as u32;
+            }
+        }
+        slots
+    }
+
+    /// The unit normal n̂ of the prepared simplex in `slot` (see [`Bvh::id_slots`]), bit for bit
+    /// [`PreparedSimplex::normal`](super::PreparedSimplex::normal).
+    #[inline]
+    pub fn slot_normal(&self, slot: u32) -> Vector<N> {
+        let (b, l) = (slot as usize / BLOCK_WIDTH, slot as usize % BLOCK_WIDTH);
+        std::array::from_fn(|i| self.blocks[b].m[0][i][l])
+    }
+
     /// Depth of the 8-wide tree counting the leaf level (0 when empty).
     pub fn depth(&self) -> usize {
         fn rec<const N: usize>(nodes: &[WideNode<N>], i: usize) -> usize {

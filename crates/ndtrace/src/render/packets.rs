@@ -64,7 +64,7 @@ pub(super) struct ObjectShading {
 impl ObjectShading {
     /// The constants of every object of `scene`, in object order.
     pub(super) fn all<const N: usize>(scene: &Scene<N>) -> Vec<Self> {
-        let all = 0..scene.flat_normals.len() as u32;
+        let all = 0..scene.simplex_count() as u32;
         (0..scene.objects.len())
             .map(|obj| {
                 let m = &scene.objects[obj].material;

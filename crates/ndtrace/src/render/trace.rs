@@ -9,7 +9,6 @@ use super::tiles::{chunking, tile_order};
 use super::{NearestHit, Progress, Retina};
 use crate::accel::PACKET;
 use crate::camera::CentreRays;
-use crate::linalg::dot;
 use crate::scene::desc::RenderMode;
 use crate::scene::Scene;
 use crate::{NdError, NdResult};
@@ -22,15 +21,7 @@ pub fn trace<const N: usize>(scene: &Scene<N>, progress: &Progress) -> NdResult<
     // Back-face culling (course notes): discard a simplex when det[x_1−x_0 … | C − x_0] < 0,
     // i.e. when its normal points away from the eye. The eye is fixed per trace.
     if scene.render.cull_backfaces {
-        let culled: Vec<bool> = (0..scene.flat_normals.len())
-            .into_par_iter()
-            .map(|g| {
-                let (o, s) = scene.locate(g as u32);
-                let obj = &scene.objects[o];
-                let x0 = obj.mesh.vertices[obj.mesh.simplices[s][0] as usize];
-                dot(&scene.flat_normals[g], &scene.camera.toward_eye(&x0)) < 0.0
-            })
-            .collect();
+        let culled = scene.backfaces();
         trace_accepting(scene, progress, |id| !culled[id as usize])
     } else {
         trace_accepting(scene, progress, |_| true)

@@ -8,7 +8,7 @@ pub use super::fields::Rgb;
 use super::fields::{coefficient, matrix_rows, mesh_from_rows, rgb, vec_n, R};
 use super::mesh_file::{orientation_warning, read_mesh, MeshReader};
 use super::transform::transform;
-use crate::accel::{Bvh, PreparedSimplex};
+use crate::accel::{simplex_bounds, Bounds, Bvh, PreparedSimplex, MORTON_MIN};
 use crate::camera::{look_at_orientation, Camera};
 use crate::linalg::{
     add, cofactor_matrix, det, dot, identity, mat_mul, mat_vec, norm, scale, transpose, Matrix,
@@ -105,8 +105,9 @@ pub struct Scene<const N: usize> {
     pub render: RenderDesc,
     /// BVH over every non-degenerate simplex; hit ids are global ids (see [`Scene::locate`]).
     pub bvh: Bvh<N>,
-    /// Unit flat normal (eq. 6) per global simplex id.
-    pub flat_normals: Vec<Vector<N>>,
+    /// Per global simplex id, where the BVH keeps its prepared simplex (see
+    /// [`Bvh::id_slots`]): the flat normals are read from there, not stored twice.
+    normal_slots: Vec<u32>,
     /// First global id of each object's simplices.
     pub offsets: Vec<u32>,
     /// Simplices skipped because they have no volume.
@@ -131,8 +132,36 @@ impl<const N: usize> Scene<N> {
             .offsets
             .get(obj + 1)
             .copied()
-            .unwrap_or(self.flat_normals.len() as u32);
+            .unwrap_or(self.simplex_count() as u32);
         self.offsets[obj]..end
+    }
+
+    /// Number of simplices of all objects (global ids are `0..simplex_count()`).
+    pub fn simplex_count(&self) -> usize {
+        self.normal_slots.len()
+    }
+
+    /// Unit flat normal (eq. 6) of global simplex `g`, zero for a degenerate one.
+    #[inline]
+    pub fn flat_normal(&self, g: u32) -> Vector<N> {
+        match self.normal_slots[g as usize] {
+            u32::MAX => [0.0; N],
+            slot => self.bvh.slot_normal(slot),
+        }
+    }
+
+    /// Per global simplex id, whether back-face culling removes it for this camera (course
+    /// notes: when det[x_1−x_0 … | C − x_0] < 0, i.e. when its normal points away from the eye).
+    pub fn backfaces(&self) -> Vec<bool> {
+        (0..self.simplex_count() as u32)
+            .into_par_iter()
+            .map(|g| {
+                let (o, s) = self.locate(g);
+                let obj = &self.objects[o];
+                let x0 = obj.mesh.vertices[obj.mesh.simplices[s][0] as usize];
+                dot(&self.flat_normal(g), &self.camera.toward_eye(&x0)) < 0.0
+            })
+            .collect()
     }
 }
 
@@ -303,11 +332,18 @@ fn camera<const N: usize>(c: &CameraDesc, samples: u32) -> R<Camera<N>> {
     })
 }
 
-/// Bytes per simplex while the scene is built: its record (prepared matrix and origin, normal,
-/// bounds), the copies handed to the BVH and the BVH's leaf blocks.
-fn bvh_bytes_per_simplex(n: usize) -> f64 {
+/// Bytes the BVH of `count` simplices in R^n needs at the peak of its build. The SAH build
+/// holds each simplex's record (prepared matrix and origin, normal, bounds), the copies handed
+/// to the BVH and the leaf blocks; the Morton build (from [`MORTON_MIN`] simplices) the blocks,
+/// the sort keys, the blocks' boxes and the nodes.
+pub(crate) fn bvh_bytes(n: usize, count: f64) -> f64 {
     let prepared = ((n * n + n) * 8) as f64;
-    3.0 * prepared + (5 * n * 8 + 16) as f64
+    let per_simplex = if count >= MORTON_MIN as f64 {
+        prepared + (24 + 4 * n) as f64
+    } else {
+        3.0 * prepared + (5 * n * 8 + 16) as f64
+    };
+    count * per_simplex
 }
 
 /// Only surface objects may be transparent.
@@ -374,7 +410,7 @@ fn object_mesh<const N: usize>(
             }
             // The mesh and the BVH it will need, refused before the work of generating it.
             crate::memory::check(
-                count * (4.0 * N as f64 + bvh_bytes_per_simplex(N)),
+                count * 4.0 * N as f64 + bvh_bytes(N, count),
                 &format!("a sphere of {count} simplices and its BVH"),
             )
             .map_err(|e| PathError::new(format!("{path}.subdivisions"), e))?;
@@ -699,6 +735,17 @@ pub fn build_with<const N: usize>(
     base: Option<&Path>,
     reader: Option<&dyn MeshReader>,
 ) -> R<Scene<N>> {
+    build_using(desc, base, reader, MORTON_MIN)
+}
+
+/// [`build_with`], building the BVH with [`Bvh::build_morton`] from `morton_min` simplices
+/// (tests compare both builds on small scenes).
+pub(crate) fn build_using<const N: usize>(
+    desc: &SceneDesc,
+    base: Option<&Path>,
+    reader: Option<&dyn MeshReader>,
+    morton_min: usize,
+) -> R<Scene<N>> {
     // 1. Everything that can be checked cheaply, before any heavy work.
     let background = rgb(&desc.background, "background")?;
     let ambient = rgb(&desc.ambient, "ambient")?;
@@ -899,69 +946,72 @@ pub fn build_with<const N: usize>(
             ),
         ));
     }
+    let morton = total as usize >= morton_min;
     crate::memory::check(
-        total as f64 * bvh_bytes_per_simplex(N),
+        bvh_bytes(N, total as f64),
         &format!("the BVH of {total} simplices"),
     )
     .map_err(|e| PathError::new("objects", e))?;
-    let per_object: Vec<Vec<PrimRecord<N>>> = objects
-        .iter()
-        .zip(&offsets)
-        .map(|(o, &off)| {
-            (0..o.mesh.simplices.len())
-                .into_par_iter()
-                .map(|s| {
-                    let pts = o.mesh.simplex_points(s);
-                    let mut lo = pts[0];
-                    let mut hi = pts[0];
-                    for p in &pts[1..] {
-                        for k in 0..N {
-                            lo[k] = lo[k].min(p[k]);
-                            hi[k] = hi[k].max(p[k]);
-                        }
-                    }
-                    let prep = PreparedSimplex::new(&pts);
-                    let n = prep.as_ref().map_or([0.0; N], |p| p.normal());
-                    (off + s as u32, prep, n, (lo, hi))
-                })
-                .collect()
-        })
-        .collect();
-    // Convexity certificates, which only shadow rays use.
-    if r.shadows && !lights.is_empty() {
-        for ((o, list), d) in objects.iter_mut().zip(&per_object).zip(&desc.objects) {
-            let normals: Vec<Vector<N>> = list.par_iter().map(|rec| rec.2).collect();
-            // The generated polytopes are convex; an affine map keeps them so.
-            let known = matches!(
-                d.shape,
-                ShapeKind::Simplex | ShapeKind::Hypercube | ShapeKind::CrossPolytope
+    let shadows = r.shadows && !lights.is_empty();
+    let bvh = if morton {
+        let simplex = |g: usize| {
+            let o = offsets.partition_point(|&off| off as usize <= g) - 1;
+            objects[o].mesh.simplex_points(g - offsets[o] as usize)
+        };
+        let domain = objects
+            .par_iter()
+            .flat_map(|o| o.mesh.vertices.par_iter())
+            .map(|v| (*v, *v))
+            .reduce(
+                || ([f64::INFINITY; N], [f64::NEG_INFINITY; N]),
+                |(a, b), (c, d)| {
+                    (
+                        std::array::from_fn(|k| a[k].min(c[k])),
+                        std::array::from_fn(|k| b[k].max(d[k])),
+                    )
+                },
             );
-            o.convex = crate::convex::convex_side(&o.mesh, &normals, known);
-        }
-    }
-    let mut prims = Vec::with_capacity(total as usize);
-    let mut ids = Vec::with_capacity(total as usize);
-    let mut bounds = Vec::with_capacity(total as usize);
-    let mut flat_normals = Vec::with_capacity(total as usize);
-    let mut skipped = 0;
-    let (mut lo, mut hi) = ([f64::INFINITY; N], [f64::NEG_INFINITY; N]);
-    for list in per_object {
-        for (id, prep, n, bb) in list {
-            flat_normals.push(n);
-            match prep {
-                Some(p) => {
-                    for k in 0..N {
-                        lo[k] = lo[k].min(bb.0[k]);
-                        hi[k] = hi[k].max(bb.1[k]);
-                    }
-                    prims.push(p);
-                    ids.push(id);
-                    bounds.push(bb);
-                }
-                None => skipped += 1,
+        Bvh::build_morton(total as usize, domain, simplex)
+    } else {
+        sah_bvh(&mut objects, &desc.objects, &offsets, shadows)
+    };
+    let normal_slots = bvh.id_slots(total as usize);
+    let skipped = total as usize - bvh.len();
+    if morton && shadows {
+        // Convexity certificates from the normals the BVH holds (elevation maps are not
+        // certified: see `sah_bvh`).
+        for (i, (o, d)) in objects.iter_mut().zip(&desc.objects).enumerate() {
+            if d.shape == ShapeKind::Elevation {
+                continue;
             }
+            let first = offsets[i] as usize;
+            let normals: Vec<Vector<N>> = (first..first + o.mesh.simplices.len())
+                .into_par_iter()
+                .map(|g| match normal_slots[g] {
+                    u32::MAX => [0.0; N],
+                    slot => bvh.slot_normal(slot),
+                })
+                .collect();
+            o.convex = crate::convex::convex_side(&o.mesh, &normals, known_convex(d.shape));
         }
     }
+    // The extent of the simplices the BVH holds (min and max are exact in any order).
+    let bounds_of = |g: usize| {
+        let o = offsets.partition_point(|&off| off as usize <= g) - 1;
+        simplex_bounds(&objects[o].mesh.simplex_points(g - offsets[o] as usize))
+    };
+    let merge = |(a, b): Bounds<N>, (c, d): Bounds<N>| -> Bounds<N> {
+        (
+            std::array::from_fn(|k| a[k].min(c[k])),
+            std::array::from_fn(|k| b[k].max(d[k])),
+        )
+    };
+    let empty = || ([f64::INFINITY; N], [f64::NEG_INFINITY; N]);
+    let (mut lo, mut hi) = (0..total as usize)
+        .into_par_iter()
+        .filter(|&g| normal_slots[g] != u32::MAX)
+        .map(bounds_of)
+        .reduce(empty, merge);
     // Surface vertices count toward the scene's extent (it sets their shadow rays' offset).
     for o in objects.iter().filter(|o| o.surface.is_some()) {
         for v in &o.mesh.vertices {
@@ -986,8 +1036,6 @@ pub fn build_with<const N: usize>(
             "skipped {skipped} degenerate (zero-volume) simplices"
         ));
     }
-    let bvh = Bvh::build(prims, ids, bounds);
-    let _ = dot::<N>;
     Ok(Scene {
         camera,
         objects,
@@ -996,10 +1044,68 @@ pub fn build_with<const N: usize>(
         background,
         render: desc.render.clone(),
         bvh,
-        flat_normals,
+        normal_slots,
         offsets,
         skipped_degenerate: skipped,
         extent,
         warnings,
     })
+}
+
+/// The generated polytopes are convex; an affine map keeps them so.
+fn known_convex(shape: ShapeKind) -> bool {
+    matches!(
+        shape,
+        ShapeKind::Simplex | ShapeKind::Hypercube | ShapeKind::CrossPolytope
+    )
+}
+
+/// The SAH-built BVH over every non-degenerate simplex of the objects (global ids from
+/// `offsets`), and the objects' convexity certificates when shadow rays will use them.
+fn sah_bvh<const N: usize>(
+    objects: &mut [Object<N>],
+    descs: &[ObjectDesc],
+    offsets: &[u32],
+    shadows: bool,
+) -> Bvh<N> {
+    let per_object: Vec<Vec<PrimRecord<N>>> = objects
+        .iter()
+        .zip(offsets)
+        .map(|(o, &off)| {
+            (0..o.mesh.simplices.len())
+                .into_par_iter()
+                .map(|s| {
+                    let pts = o.mesh.simplex_points(s);
+                    let prep = PreparedSimplex::new(&pts);
+                    let n = prep.as_ref().map_or([0.0; N], |p| p.normal());
+                    (off + s as u32, prep, n, simplex_bounds(&pts))
+                })
+                .collect()
+        })
+        .collect();
+    // Convexity certificates, which only shadow rays use. An elevation map is not certified:
+    // it is a graph over a box, an open surface, and the test would cost more than it saves.
+    if shadows {
+        for ((o, list), d) in objects.iter_mut().zip(&per_object).zip(descs) {
+            if d.shape == ShapeKind::Elevation {
+                continue;
+            }
+            let normals: Vec<Vector<N>> = list.par_iter().map(|rec| rec.2).collect();
+            o.convex = crate::convex::convex_side(&o.mesh, &normals, known_convex(d.shape));
+        }
+    }
+    let total = per_object.iter().map(Vec::len).sum();
+    let mut prims = Vec::with_capacity(total);
+    let mut ids = Vec::with_capacity(total);
+    let mut bounds = Vec::with_capacity(total);
+    for list in per_object {
+        for (id, prep, _, bb) in list {
+            if let Some(p) = prep {
+                prims.push(p);
+                ids.push(id);
+                bounds.push(bb);
+            }
+        }
+    }
+    Bvh::build(prims, ids, bounds)
 }

@@ -130,9 +130,22 @@ pub(crate) fn elevation_object<const N: usize>(
         values: &values,
         shape,
     };
+    // The mesh (per grid point one vertex, its normal and value, six tetrahedra) and the BVH
+    // over its tetrahedra, refused before any of it is built.
+    let points = field.values.len() as f64;
+    let tets = 6.0
+        * shape
+            .iter()
+            .map(|&k| k.saturating_sub(1) as f64)
+            .product::<f64>();
     crate::memory::check(
-        field.values.len() as f64 * (6.0 * 4.0 * 4.0 + 8.0 * 4.0 + 16.0),
-        &format!("an elevation map of {} grid points", field.values.len()),
+        points * (8.0 * 4.0 + 8.0 * 4.0 + 8.0)
+            + tets * 4.0 * 4.0
+            + super::build::bvh_bytes(N, tets),
+        &format!(
+            "an elevation map of {} grid points and its BVH",
+            field.values.len()
+        ),
     )
     .map_err(|e| PathError::new(path, e))?;
     let elev = elevation_map::<N>(&field, extent.as_ref(), height).map_err(|e| {

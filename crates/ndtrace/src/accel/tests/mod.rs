@@ -5,6 +5,7 @@
 mod build;
 mod collapse;
 mod kernels;
+mod morton;
 mod simplex;
 mod traverse;
 mod tree;

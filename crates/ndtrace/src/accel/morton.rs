@@ -1,0 +1,394 @@
+//! The Morton build of the wide tree for very large inputs ([`Bvh::build_morton`]): linear-time
+//! grouping instead of the SAH, and no per-simplex memory beyond the finished tree's.
+//!
+//! 1. Each simplex gets the Morton code of its box centre: the centre quantised inside the box
+//!    of all vertices, the bits interleaved (most significant first), so that sorting by code
+//!    lays the simplices out along a Z-order curve (Lauterbach et al., "Fast BVH construction on
+//!    GPUs", 2009). The sort key is the code above the simplex's index in one u64 (the index
+//!    takes the bits it needs, the axes share the rest).
+//! 2. Sorted by (code, index), consecutive runs of [`BLOCK_WIDTH`] simplices become the leaf
+//!    blocks, so every block but the last is full.
+//! 3. The wide nodes group the blocks by the leading bits of their codes, three bits (eight
+//!    buckets) per level, down from the highest bit in which the first and last code of a range
+//!    differ (an 8-ary radix tree over the codes): a range of at most [`NODE_WIDTH`] blocks is
+//!    one node over them, a bucket of one block is a leaf slot, equal codes are split by count.
+//! 4. Boxes are computed bottom-up from the simplices' vertices (each padded by
+//!    [`BOX_PAD`](super::BOX_PAD) of its largest extent, as in the SAH build) and rounded
+//!    outward to `f32`; the nodes are made before the leaf blocks (the prepared simplices),
+//!    so that the per-block boxes are gone when the big blocks arrive.
+//!
+//! Every step depends on the input only (ties in the sort go to the lower index, the grouping
+//! is sequential, the parallel passes write to fixed places), so the tree is the same for any
+//! number of threads. Queries give the same results as over the SAH tree: a closest hit is the
+//! minimum of (t, id) over the accepted hits whatever the tree's shape.
+
+use super::build::BOX_PAD;
+use super::simplex::{simplex_bounds, Bounds, PreparedSimplex};
+use super::tree::{
+    f32_down, f32_up, Bvh, LeafBlock, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
+};
+use crate::linalg::Vector;
+use rayon::prelude::*;
+
+/// Scenes of at least this many simplices are built with [`Bvh::build_morton`] (about 2 M:
+/// beyond it the SAH build's passes over all simplices and its per-simplex buffers, some
+/// 400 bytes each in 4D, dominate loading; below it, the SAH tree's faster queries win).
+pub const MORTON_MIN: usize = 1 << 21;
+
+/// A child slot of the grouping: nothing, a leaf block, or a wide node (by index).
+#[derive(Clone, Copy)]
+enum Slot {
+    Empty,
+    Block(u32),
+    Node(u32),
+}
+
+/// `SPREAD[n][b]`: the 8 bits of byte b moved to bits 0, n, 2n, … (n = 2 … 8), so that the
+/// Morton code interleaves whole bytes of the axes' quantised coordinates at once.
+static SPREAD: [[u64; 256]; 9] = {
+    let mut t = [[0u64; 256]; 9];
+    let mut n = 2;
+    while n <= 8 {
+        let mut b = 0;
+        while b < 256 {
+            let mut j = 0;
+            while j < 8 {
+                t[n][b] |= (((b >> j) & 1) as u64) << (j * n);
+                j += 1;
+            }
+            b += 1;
+        }
+        n += 1;
+    }
+    t
+};
+
+/// Quantises `c` into the box `lo + [0, top/scale]` with `bits ≤ 64/N` bits per axis
+/// (`top = 2^bits − 1`) and interleaves the bits, most significant first (axis 0 leading
+/// within each bit level).
+pub(super) fn morton<const N: usize>(
+    c: &Vector<N>,
+    lo: &Vector<N>,
+    scale: &Vector<N>,
+    bits: usize,
+) -> u64 {
+    let top = ((1u128 << bits) - 1) as f64;
+    let spread = &SPREAD[N];
+    let mut code = 0u64;
+    for a in 0..N {
+        // NaN (a non-finite simplex, dropped later) quantises to 0 through `as`.
+        let q = ((c[a] - lo[a]) * scale[a]).clamp(0.0, top) as u64;
+        // Bit j of q goes to bit j·N + (N − 1 − a).
+        let mut s = 0u64;
+        let mut byte = 0;
+        while byte * 8 < bits {
+            s |= spread[((q >> (8 * byte)) & 0xff) as usize] << (8 * byte * N);
+            byte += 1;
+        }
+        code |= s << (N - 1 - a);
+    }
+    code
+}
+
+/// The box centre of a simplex.
+fn centre<const N: usize>(p: &[[f64; N]; N]) -> Vector<N> {
+    std::array::from_fn(|i| {
+        let (lo, hi) = p
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+                (l.min(v[i]), h.max(v[i]))
+            });
+        0.5 * (lo + hi)
+    })
+}
+
+/// What the grouping needs of a leaf block: its box, rounded outward to f32, and the least and
+/// greatest id it holds.
+struct BlockInfo<const N: usize> {
+    lo: [f32; N],
+    hi: [f32; N],
+    ids: [u32; 2],
+}
+
+/// Ranges of at least this many blocks have their children grouped in parallel.
+const PAR_BLOCKS: usize = 1 << 14;
+
+/// The ≤ 8 sub-ranges that the blocks `a..b` (more than [`NODE_WIDTH`] of them, with sorted
+/// `keys`, the key of each block's first simplex) split into: by the three bits of the keys
+/// from the highest one in which the range's first and last key differ (all keys of the range
+/// share the bits above it).
+fn split(keys: &[u64], a: usize, b: usize) -> Vec<(usize, usize)> {
+    let k = &keys[a..b];
+    let diff = k[0] ^ k[k.len() - 1];
+    if diff == 0 {
+        // Equal keys (not made by `build_morton`, whose keys hold the index): eight runs.
+        let n = b - a;
+        return (0..NODE_WIDTH)
+            .map(|i| (a + n * i / NODE_WIDTH, a + n * (i + 1) / NODE_WIDTH))
+            .filter(|(x, y)| y > x)
+            .collect();
+    }
+    let high = 63 - diff.leading_zeros();
+    let low = high.saturating_sub(2);
+    let bucket = |key: u64| (key >> low) & 0b111;
+    let mut out = Vec::with_capacity(NODE_WIDTH);
+    let mut start = 0;
+    while start < k.len() {
+        let b0 = bucket(k[start]);
+        let end = start + k[start..].partition_point(|&key| bucket(key) == b0);
+        out.push((a + start, a + end));
+        start = end;
+    }
+    out
+}
+
+/// The children of the node over blocks `a..b` (at least 2).
+fn parts(keys: &[u64], a: usize, b: usize) -> Vec<(usize, usize)> {
+    if b - a <= NODE_WIDTH {
+        (a..b).map(|i| (i, i + 1)).collect()
+    } else {
+        split(keys, a, b)
+    }
+}
+
+/// The 8-ary grouping of the blocks `a..b` (at least 2) as wide nodes in depth-first order,
+/// children after their parent, node indices relative to the first (this subtree's root).
+/// Large ranges group their children in parallel; the result does not depend on it.
+fn grouping(keys: &[u64], a: usize, b: usize) -> Vec<[Slot; NODE_WIDTH]> {
+    let mut out = Vec::new();
+    if b - a < PAR_BLOCKS {
+        grouping_seq(keys, a, b, &mut out);
+        return out;
+    }
+    let parts = parts(keys, a, b);
+    let subtrees: Vec<Option<Vec<[Slot; NODE_WIDTH]>>> = parts
+        .par_iter()
+        .map(|&(x, y)| (y - x > 1).then(|| grouping(keys, x, y)))
+        .collect();
+    out.push([Slot::Empty; NODE_WIDTH]);
+    for (l, (&(x, _), sub)) in parts.iter().zip(subtrees).enumerate() {
+        out[0][l] = match sub {
+            None => Slot::Block(x as u32),
+            Some(nodes) => {
+                let base = out.len() as u32;
+                out.extend(nodes.into_iter().map(|slots| {
+                    slots.map(|s| match s {
+                        Slot::Node(j) => Slot::Node(j + base),
+                        other => other,
+                    })
+                }));
+                Slot::Node(base)
+            }
+        };
+    }
+    out
+}
+
+/// [`grouping`] in one thread, appending to `out` (indices relative to the start of `out`).
+fn grouping_seq(keys: &[u64], a: usize, b: usize, out: &mut Vec<[Slot; NODE_WIDTH]>) -> u32 {
+    let me = out.len();
+    out.push([Slot::Empty; NODE_WIDTH]);
+    for (l, (x, y)) in parts(keys, a, b).into_iter().enumerate() {
+        let slot = if y - x == 1 {
+            Slot::Block(x as u32)
+        } else {
+            Slot::Node(grouping_seq(keys, x, y, out))
+        };
+        out[me][l] = slot;
+    }
+    me as u32
+}
+
+impl<const N: usize> Bvh<N> {
+    /// The Morton build (see the module `morton`) over `count` simplices, simplex i being
+    /// `simplex(i)` with id i, whose vertices lie in the box `domain` (it sets the quantisation
+    /// of the codes; a simplex outside it only loses locality); degenerate and non-finite ones are left out, as in
+    /// [`Bvh::from_simplices`]. Linear work after one sort, parallel, and lean: besides the
+    /// finished tree it holds 8 bytes per simplex (the sort keys) and the blocks' boxes.
+    /// Queries return the same hits as over the SAH build; the tree is looser, so they are
+    /// somewhat slower on irregular meshes.
+    ///
+    /// # Panics
+    /// If `count` is 2³¹ or more.
+    pub fn build_morton(
+        count: usize,
+        domain: Bounds<N>,
+        simplex: impl Fn(usize) -> [[f64; N]; N] + Sync,
+    ) -> Self {
+        assert!(
+            count < LEAF_TAG as usize,
+            "Bvh::build_morton: too many simplices"
+        );
+        let empty = Bvh {
+            nodes: Vec::new(),
+            blocks: Vec::new(),
+            len: 0,
+            reach: 0.0,
+            ranges: Vec::new(),
+        };
+        if count == 0 {
+            return empty;
+        }
+        // 1. Codes, quantised in the box of the simplices' vertices (it holds every centre).
+        let (clo, chi) = domain;
+        // A sort key is the code above the index: `bits` per axis in the 64 bits the index
+        // leaves (the index breaks ties, so equal codes keep input order).
+        let id_bits = (usize::BITS - (count - 1).leading_zeros()).max(1) as usize;
+        let bits = (64 - id_bits) / N;
+        let top = ((1u128 << bits) - 1) as f64;
+        let scale: Vector<N> = std::array::from_fn(|i| {
+            let s = top / (chi[i] - clo[i]);
+            if s.is_finite() && s > 0.0 {
+                s
+            } else {
+                0.0
+            }
+        });
+        let mut order: Vec<u64> = (0..count)
+            .into_par_iter()
+            .map(|i| (morton(&centre(&simplex(i)), &clo, &scale, bits) << id_bits) | i as u64)
+            .collect();
+        // 2. Blocks of consecutive simplices in key order, with their boxes (each simplex's box
+        //    padded by BOX_PAD of its largest extent) and least and greatest ids.
+        order.par_sort_unstable();
+        let id_mask = (1u64 << id_bits) - 1;
+        let keys: Vec<u64> = order.par_chunks(BLOCK_WIDTH).map(|c| c[0]).collect();
+        // The blocks' boxes and id ranges first, so that the tree's nodes exist before the big
+        // leaf blocks are made. They cover every finite simplex of the block, degenerate ones
+        // too (the blocks leave those out), which only makes them conservative.
+        let infos: Vec<BlockInfo<N>> = order
+            .par_chunks(BLOCK_WIDTH)
+            .map(|run| {
+                let (mut lo, mut hi) = ([f64::INFINITY; N], [f64::NEG_INFINITY; N]);
+                let (mut first, mut last) = (u32::MAX, 0);
+                for &key in run {
+                    let id = (key & id_mask) as u32;
+                    let pts = simplex(id as usize);
+                    if !pts.iter().flatten().all(|x| x.is_finite()) {
+                        continue;
+                    }
+                    let (a, b) = simplex_bounds(&pts);
+                    let pad = BOX_PAD * (0..N).map(|i| b[i] - a[i]).fold(0.0, f64::max);
+                    for i in 0..N {
+                        lo[i] = lo[i].min(a[i] - pad);
+                        hi[i] = hi[i].max(b[i] + pad);
+                    }
+                    first = first.min(id);
+                    last = last.max(id);
+                }
+                BlockInfo {
+                    lo: lo.map(f32_down),
+                    hi: hi.map(f32_up),
+                    ids: [first, last],
+                }
+            })
+            .collect();
+        // 3. The grouping, then the wide nodes bottom-up.
+        let block_count = infos.len();
+        let groups = if block_count == 1 {
+            let mut root = [Slot::Empty; NODE_WIDTH];
+            root[0] = Slot::Block(0);
+            vec![root]
+        } else {
+            grouping(&keys, 0, block_count)
+        };
+        drop(keys);
+        // Children come after their parent: one pass from the last node up sees them first.
+        let mut nodes = vec![WideNode::<N>::EMPTY; groups.len()];
+        let mut ranges = vec![[[u32::MAX; NODE_WIDTH], [0; NODE_WIDTH]]; groups.len()];
+        for i in (0..groups.len()).rev() {
+            for (l, slot) in groups[i].iter().enumerate() {
+                let (child, lo, hi, ids) = match *slot {
+                    Slot::Empty => continue,
+                    Slot::Block(b) if infos[b as usize].ids[0] == u32::MAX => continue,
+                    Slot::Block(b) => {
+                        let info = &infos[b as usize];
+                        (LEAF_TAG | b, info.lo, info.hi, info.ids)
+                    }
+                    Slot::Node(j) => {
+                        let (c, r) = (&nodes[j as usize], &ranges[j as usize]);
+                        let lo = std::array::from_fn(|a| {
+                            c.bounds[0][a].iter().copied().fold(f32::INFINITY, f32::min)
+                        });
+                        let hi = std::array::from_fn(|a| {
+                            c.bounds[1][a]
+                                .iter()
+                                .copied()
+                                .fold(f32::NEG_INFINITY, f32::max)
+                        });
+                        let ids = [
+                            r[0].iter().copied().min().unwrap_or(u32::MAX),
+                            r[1].iter().copied().max().unwrap_or(0),
+                        ];
+                        (j, lo, hi, ids)
+                    }
+                };
+                let nd = &mut nodes[i];
+                nd.child[l] = child;
+                for a in 0..N {
+                    nd.bounds[0][a][l] = lo[a];
+                    nd.bounds[1][a][l] = hi[a];
+                }
+                ranges[i][0][l] = ids[0];
+                ranges[i][1][l] = ids[1];
+            }
+        }
+        drop(infos);
+        drop(groups);
+        // 4. The leaf blocks: the prepared simplices, in key order.
+        let blocks: Vec<LeafBlock<N>> = order
+            .par_chunks(BLOCK_WIDTH)
+            .map(|run| {
+                let mut block = LeafBlock {
+                    m: [[[0.0; BLOCK_WIDTH]; N]; N],
+                    x0: [[0.0; BLOCK_WIDTH]; N],
+                    ids: [EMPTY_SLOT; BLOCK_WIDTH],
+                    count: 0,
+                };
+                for &key in run {
+                    let id = (key & id_mask) as u32;
+                    let Some(p) = PreparedSimplex::new(&simplex(id as usize)) else {
+                        continue;
+                    };
+                    let l = block.count as usize;
+                    for k in 0..N {
+                        for i in 0..N {
+                            block.m[k][i][l] = p.m[k][i];
+                        }
+                    }
+                    for i in 0..N {
+                        block.x0[i][l] = p.x0[i];
+                    }
+                    block.ids[l] = id;
+                    block.count += 1;
+                }
+                block
+            })
+            .collect();
+        drop(order);
+        let len: usize = blocks.par_iter().map(|b| b.count as usize).sum();
+        if len == 0 {
+            return empty;
+        }
+        let root = &nodes[0];
+        let reach = (0..N)
+            .flat_map(|a| (0..NODE_WIDTH).map(move |l| (a, l)))
+            .filter(|&(_, l)| root.child[l] != EMPTY_SLOT)
+            .map(|(a, l)| {
+                f64::from(root.bounds[0][a][l].abs()).max(f64::from(root.bounds[1][a][l].abs()))
+            })
+            .fold(0.0, f64::max);
+        let reach = if reach.is_finite() {
+            reach
+        } else {
+            f64::from(f32::MAX)
+        };
+        Bvh {
+            nodes,
+            blocks,
+            len,
+            reach,
+            ranges,
+        }
+    }
+}
