@@ -954,24 +954,14 @@ pub(crate) fn build_using<const N: usize>(
     .map_err(|e| PathError::new("objects", e))?;
     let shadows = r.shadows && !lights.is_empty();
     let bvh = if morton {
-        let simplex = |g: usize| {
-            let o = offsets.partition_point(|&off| off as usize <= g) - 1;
-            objects[o].mesh.simplex_points(g - offsets[o] as usize)
-        };
         let domain = objects
             .par_iter()
             .flat_map(|o| o.mesh.vertices.par_iter())
             .map(|v| (*v, *v))
-            .reduce(
-                || ([f64::INFINITY; N], [f64::NEG_INFINITY; N]),
-                |(a, b), (c, d)| {
-                    (
-                        std::array::from_fn(|k| a[k].min(c[k])),
-                        std::array::from_fn(|k| b[k].max(d[k])),
-                    )
-                },
-            );
-        Bvh::build_morton(total as usize, domain, simplex)
+            .reduce(empty_box, merge_boxes);
+        Bvh::build_morton(total as usize, domain, |g| {
+            simplex_at(&objects, &offsets, g)
+        })
     } else {
         sah_bvh(&mut objects, &desc.objects, &offsets, shadows)
     };
@@ -996,22 +986,11 @@ pub(crate) fn build_using<const N: usize>(
         }
     }
     // The extent of the simplices the BVH holds (min and max are exact in any order).
-    let bounds_of = |g: usize| {
-        let o = offsets.partition_point(|&off| off as usize <= g) - 1;
-        simplex_bounds(&objects[o].mesh.simplex_points(g - offsets[o] as usize))
-    };
-    let merge = |(a, b): Bounds<N>, (c, d): Bounds<N>| -> Bounds<N> {
-        (
-            std::array::from_fn(|k| a[k].min(c[k])),
-            std::array::from_fn(|k| b[k].max(d[k])),
-        )
-    };
-    let empty = || ([f64::INFINITY; N], [f64::NEG_INFINITY; N]);
     let (mut lo, mut hi) = (0..total as usize)
         .into_par_iter()
         .filter(|&g| normal_slots[g] != u32::MAX)
-        .map(bounds_of)
-        .reduce(empty, merge);
+        .map(|g| simplex_bounds(&simplex_at(&objects, &offsets, g)))
+        .reduce(empty_box, merge_boxes);
     // Surface vertices count toward the scene's extent (it sets their shadow rays' offset).
     for o in objects.iter().filter(|o| o.surface.is_some()) {
         for v in &o.mesh.vertices {
@@ -1050,6 +1029,26 @@ pub(crate) fn build_using<const N: usize>(
         extent,
         warnings,
     })
+}
+
+/// The points of global simplex g of the objects whose first global ids are `offsets` (what
+/// [`Scene::locate`] does, before there is a scene).
+fn simplex_at<const N: usize>(objects: &[Object<N>], offsets: &[u32], g: usize) -> [Vector<N>; N] {
+    let o = offsets.partition_point(|&off| off as usize <= g) - 1;
+    objects[o].mesh.simplex_points(g - offsets[o] as usize)
+}
+
+/// The empty box, the identity of [`merge_boxes`].
+fn empty_box<const N: usize>() -> Bounds<N> {
+    ([f64::INFINITY; N], [f64::NEG_INFINITY; N])
+}
+
+/// The box of two boxes (exact, so any reduction order gives the same bits).
+fn merge_boxes<const N: usize>((a, b): Bounds<N>, (c, d): Bounds<N>) -> Bounds<N> {
+    (
+        std::array::from_fn(|k| a[k].min(c[k])),
+        std::array::from_fn(|k| b[k].max(d[k])),
+    )
 }
 
 /// The generated polytopes are convex; an affine map keeps them so.
