@@ -7,7 +7,8 @@ memory is its own, prints
 * ``build``: field file (``.npy``) → scene → built BVH, the path of ``ndtrace scan.toml``,
   and the same from the numpy array through the builder (``add_object("elevation", field=f)``);
 * ``trace``: the built scene traced at ``--res``³, 1 sample (median of 3), with the hit fraction;
-* the process's peak resident memory, in bytes per tetrahedron (6·(n−1)³ of them).
+* the process's peak resident memory (a built scene and one retina at a time), in bytes per
+  tetrahedron (6·(n−1)³ of them).
 
 Usage:  python bench/elevation.py [--sizes 64 128 256] [--res 128]
 """
@@ -70,6 +71,7 @@ def one(n: int, res: int) -> dict:
     build_array = time.perf_counter() - t
     times = []
     for _ in range(3):
+        r = None  # one retina alive at a time, as when rendering frames one after another
         t = time.perf_counter()
         r = ndtrace.trace(scene)
         times.append(time.perf_counter() - t)

@@ -19,7 +19,6 @@ naming the source, line and column (for files) and the field path, e.g.
 
 from __future__ import annotations
 
-import copy
 import errno
 import os
 import warnings
@@ -28,7 +27,7 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from . import _ndtrace
-from .mesh import _scene_reader, from_object
+from .mesh import _field, _scene_reader, from_object
 
 __all__ = ["Scene", "load_file", "load_dict", "load_toml"]
 
@@ -38,13 +37,20 @@ MAX_DEPTH = 32
 
 
 def _plain(value: Any, path: str = "", depth: int = 0) -> Any:
-    """Nested numpy arrays and scalars → lists and Python numbers (for the Rust loader).
-    A container nested deeper than :data:`MAX_DEPTH` (one that contains itself, say) is a
-    ValueError naming where."""
+    """Nested numpy arrays and scalars → lists and Python numbers (for the Rust loader), except
+    an elevation ``field`` array, which stays one C-ordered float64 array (the loader copies its
+    buffer; 2 M numbers as lists would cost about 100 bytes each). A container nested deeper
+    than :data:`MAX_DEPTH` (one that contains itself, say) is a ValueError naming where."""
     if depth > MAX_DEPTH:
         raise ValueError(f"{path or 'the scene'}: nested more than {MAX_DEPTH} levels deep "
                          "(a list or dict that contains itself?)")
     if isinstance(value, np.ndarray):
+        if path.rpartition(".")[2] == "field":
+            # A read-only snapshot: the scene must not change when the caller's array does, and
+            # copies of the scene can then share it.
+            f = np.array(_field(path, value), dtype=np.float64, order="C", copy=True)
+            f.setflags(write=False)
+            return f
         return value.tolist()
     if isinstance(value, np.generic):
         return value.item()
@@ -52,6 +58,18 @@ def _plain(value: Any, path: str = "", depth: int = 0) -> Any:
         return {k: _plain(v, f"{path}.{k}" if path else str(k), depth + 1) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [_plain(v, f"{path}[{i}]", depth + 1) for i, v in enumerate(value)]
+    return value
+
+
+def _copy_tree(value: Any) -> Any:
+    """``value`` with its dicts and lists copied all the way down and everything else (numbers,
+    strings, read-only arrays) shared."""
+    if isinstance(value, dict):
+        return {k: _copy_tree(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_copy_tree(v) for v in value]
+    if isinstance(value, np.ndarray) and value.flags.writeable:
+        return value.copy()
     return value
 
 
@@ -183,11 +201,26 @@ class Scene:
         return self.compiled().to_toml()
 
     def copy(self) -> "Scene":
+        """An independent copy: its own description (dicts and lists copied, read-only field
+        arrays shared) and, until either is changed, the same built scene."""
         other = Scene.__new__(Scene)
-        other._data = copy.deepcopy(self._data)
+        other._data = _copy_tree(self._data)
         other._base = self._base
         other._compiled = self._compiled
         return other
+
+    def __deepcopy__(self, memo: dict) -> "Scene":
+        return self.copy()
+
+    def __getstate__(self) -> dict:
+        """Pickles the description (and the folder its files resolve against); the built scene
+        is rebuilt, on first use, where it is unpickled (for Dask, multiprocessing, Ray)."""
+        return {"data": self._data, "base": self._base}
+
+    def __setstate__(self, state: dict) -> None:
+        self._data = state["data"]
+        self._base = state["base"]
+        self._compiled = None
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Scene):

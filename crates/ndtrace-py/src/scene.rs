@@ -138,9 +138,10 @@ impl CompiledScene {
         scene::to_toml(&self.desc).map_err(to_py_err)
     }
 
-    /// The description as plain Python data (dicts, lists, numbers, strings).
+    /// The description as plain Python data (dicts, lists, numbers, strings; an elevation
+    /// field given as an array stays a numpy array).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        pythonize::pythonize(py, &self.desc).map_err(|e| PyValueError::new_err(e.to_string()))
+        crate::arrays::to_dict(py, &self.desc)
     }
 
     /// The description of frame `k` of the scene's `[animation]` as plain Python data: the
@@ -149,7 +150,7 @@ impl CompiledScene {
         let frame = guarded("animation_frame", || {
             scene::animation_frame(&self.desc, k, "<scene>")
         })?;
-        pythonize::pythonize(py, &frame).map_err(|e| PyValueError::new_err(e.to_string()))
+        crate::arrays::to_dict(py, &frame)
     }
 
     /// Whether two scenes have equal descriptions.
@@ -366,14 +367,16 @@ fn load_dict(
     reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
     let reader = PyMeshReader::new(reader);
-    let mut de = pythonize::Depythonizer::from_object(data);
-    let desc = scene::deserialize(&mut de).map_err(|e| {
+    let (data, arrays) = crate::arrays::take_fields(data, name)?;
+    let mut de = pythonize::Depythonizer::from_object(&data);
+    let mut desc = scene::deserialize(&mut de).map_err(|e| {
         to_py_err(NdError::Scene {
             location: name.to_string(),
             path: e.path,
             message: e.message,
         })
     })?;
+    crate::arrays::put_fields(&mut desc, arrays);
     let scene = py.detach(|| {
         guarded("load_dict", || {
             scene::build_desc_with(&desc, name, base.as_deref(), as_reader(&reader))

@@ -152,6 +152,7 @@ pub fn solve_block<const N: usize>(a: Matrix<N>, b: Vector<N>, k: usize) -> Opti
 /// The inverse of the leading `k × k` block of `a`, by the eliminations of [`solve_block`]
 /// done once for the k right-hand sides ê_0 … ê_{k−1} together: row j of the result holds, bit
 /// for bit, `solve_block(a, ê_j, k)`. `None` when a pivot is exactly zero.
+#[inline(always)]
 pub fn inverse_rows_block<const N: usize>(a: Matrix<N>, k: usize) -> Option<Matrix<N>> {
     let unit = std::array::from_fn(|r| std::array::from_fn(|j| f64::from(r == j)));
     solve_many(a, unit, k)
@@ -160,6 +161,7 @@ pub fn inverse_rows_block<const N: usize>(a: Matrix<N>, k: usize) -> Option<Matr
 /// Gaussian elimination with partial pivoting of the leading `k × k` block of `a` for M
 /// right-hand sides at once (`b[r][j]`: entry r of right-hand side j); row j of the result
 /// is solution j. Each right-hand side undergoes exactly the operations a lone solve gives it.
+#[inline(always)]
 fn solve_many<const N: usize, const M: usize>(
     mut a: Matrix<N>,
     mut b: [[f64; M]; N],

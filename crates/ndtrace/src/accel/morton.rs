@@ -8,10 +8,11 @@
 //!    takes the bits it needs, the axes share the rest).
 //! 2. Sorted by (code, index), consecutive runs of [`BLOCK_WIDTH`] simplices become the leaf
 //!    blocks, so every block but the last is full.
-//! 3. The wide nodes group the blocks by the leading bits of their codes, three bits (eight
-//!    buckets) per level, down from the highest bit in which the first and last code of a range
-//!    differ (an 8-ary radix tree over the codes): a range of at most [`NODE_WIDTH`] blocks is
-//!    one node over them, a bucket of one block is a leaf slot, equal codes are split by count.
+//! 3. The wide nodes group the blocks by the leading bits of their codes: a range is halved at
+//!    the highest bit in which its first and last code differ (a binary radix tree over the
+//!    codes), and each wide node takes the eight largest ranges that halving its range gives;
+//!    a range of at most [`NODE_WIDTH`] blocks is one node over them, a range of one block a
+//!    leaf slot, equal codes are split by count.
 //! 4. Boxes are computed bottom-up from the simplices' vertices (each padded by
 //!    [`BOX_PAD`](super::BOX_PAD) of its largest extent, as in the SAH build) and rounded
 //!    outward to `f32`; the nodes are made before the leaf blocks (the prepared simplices),
@@ -113,31 +114,53 @@ struct BlockInfo<const N: usize> {
 /// Ranges of at least this many blocks have their children grouped in parallel.
 const PAR_BLOCKS: usize = 1 << 14;
 
-/// The ≤ 8 sub-ranges that the blocks `a..b` (more than [`NODE_WIDTH`] of them, with sorted
-/// `keys`, the key of each block's first simplex) split into: by the three bits of the keys
-/// from the highest one in which the range's first and last key differ (all keys of the range
-/// share the bits above it).
+/// The two halves of the blocks `x..y` (at least 2, with sorted `keys`): split at the highest
+/// bit in which the range's first and last key differ (every key of the range shares the bits
+/// above it, so the keys with that bit clear come first), or in the middle if all are equal.
+fn halves(keys: &[u64], x: usize, y: usize) -> [(usize, usize); 2] {
+    let diff = keys[x] ^ keys[y - 1];
+    let m = if diff == 0 {
+        // Equal keys (not made by `build_morton`, whose keys hold the index).
+        (x + y) / 2
+    } else {
+        let bit = 63 - diff.leading_zeros();
+        x + keys[x..y].partition_point(|&k| (k >> bit) & 1 == 0)
+    };
+    [(x, m), (m, y)]
+}
+
+/// The ≤ 8 sub-ranges that the blocks `a..b` (more than [`NODE_WIDTH`] of them) split into: the
+/// binary radix tree over their keys ([`halves`]) collapsed into one wide node. Ranges of more
+/// than [`NODE_WIDTH`] blocks are halved, the largest first (the first of equal ones), while
+/// there is room; then ranges small enough to fit are opened into single blocks, the smallest
+/// first, so that few nodes hold only a few blocks (a level of the code's bits that divides
+/// nothing, along a thin axis say, costs no node).
 fn split(keys: &[u64], a: usize, b: usize) -> Vec<(usize, usize)> {
-    let k = &keys[a..b];
-    let diff = k[0] ^ k[k.len() - 1];
-    if diff == 0 {
-        // Equal keys (not made by `build_morton`, whose keys hold the index): eight runs.
-        let n = b - a;
-        return (0..NODE_WIDTH)
-            .map(|i| (a + n * i / NODE_WIDTH, a + n * (i + 1) / NODE_WIDTH))
-            .filter(|(x, y)| y > x)
-            .collect();
-    }
-    let high = 63 - diff.leading_zeros();
-    let low = high.saturating_sub(2);
-    let bucket = |key: u64| (key >> low) & 0b111;
     let mut out = Vec::with_capacity(NODE_WIDTH);
-    let mut start = 0;
-    while start < k.len() {
-        let b0 = bucket(k[start]);
-        let end = start + k[start..].partition_point(|&key| bucket(key) == b0);
-        out.push((a + start, a + end));
-        start = end;
+    out.push((a, b));
+    while out.len() < NODE_WIDTH {
+        let (i, &(x, y)) = out
+            .iter()
+            .enumerate()
+            .rev()
+            .max_by_key(|(_, r)| r.1 - r.0)
+            .expect("at least one range");
+        if y - x <= NODE_WIDTH {
+            break;
+        }
+        out.splice(i..=i, halves(keys, x, y));
+    }
+    loop {
+        let room = NODE_WIDTH + 1 - out.len();
+        let Some((i, &(x, y))) = out
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| (2..=room).contains(&(r.1 - r.0)))
+            .min_by_key(|(_, r)| r.1 - r.0)
+        else {
+            break;
+        };
+        out.splice(i..=i, (x..y).map(|k| (k, k + 1)));
     }
     out
 }

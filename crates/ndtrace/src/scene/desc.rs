@@ -331,8 +331,9 @@ pub struct ObjectDesc {
     pub transform: Vec<TransformDesc>,
 }
 
-/// An elevation map's field: a file name, or the values inline as nested lists `[x][y][z]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// An elevation map's field: a file name, the values inline as nested lists `[x][y][z]`, or
+/// (from the Python builder) one flat array handed over without a trip through lists.
+#[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(
     untagged,
     expecting = "expected a file name or a 3-D array of numbers (nested lists indexed [x][y][z])"
@@ -342,6 +343,82 @@ pub enum FieldDesc {
     File(String),
     /// Inline values.
     Inline(Vec<Vec<Vec<f64>>>),
+    /// A C-ordered array set by the bindings (never read from TOML; written as nested lists).
+    #[serde(skip_deserializing)]
+    Array(Grid),
+}
+
+impl FieldDesc {
+    /// The values of an inline or array field, C-ordered, and its shape (`None` for a file or a
+    /// ragged inline list).
+    fn grid(&self) -> Option<(Vec<f64>, [usize; 3])> {
+        match self {
+            FieldDesc::File(_) => None,
+            FieldDesc::Inline(x) => {
+                let (ny, nz) = (
+                    x.first().map_or(0, Vec::len),
+                    x.first().and_then(|p| p.first()).map_or(0, Vec::len),
+                );
+                let full = x
+                    .iter()
+                    .all(|p| p.len() == ny && p.iter().all(|r| r.len() == nz));
+                full.then(|| {
+                    (
+                        x.iter().flatten().flatten().copied().collect(),
+                        [x.len(), ny, nz],
+                    )
+                })
+            }
+            FieldDesc::Array(g) => Some((g.values.to_vec(), g.shape)),
+        }
+    }
+}
+
+/// Equal descriptions: an array field equals the inline lists with the same values (what it
+/// becomes on a TOML round trip).
+impl PartialEq for FieldDesc {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (FieldDesc::File(a), FieldDesc::File(b)) => a == b,
+            (FieldDesc::Inline(a), FieldDesc::Inline(b)) => a == b,
+            (FieldDesc::Array(a), FieldDesc::Array(b)) => a == b,
+            (FieldDesc::File(_), _) | (_, FieldDesc::File(_)) => false,
+            _ => self.grid() == other.grid(),
+        }
+    }
+}
+
+/// A 3-D array of field values, C-ordered (index `[x][y][z]` at `(x·ny + y)·nz + z`), shared
+/// between copies of the description.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Grid {
+    /// `[nx, ny, nz]`.
+    pub shape: [usize; 3],
+    /// `nx·ny·nz` values.
+    pub values: std::sync::Arc<[f64]>,
+}
+
+impl Grid {
+    /// A grid of `values` with `shape`; `None` unless the counts agree.
+    pub fn new(shape: [usize; 3], values: Vec<f64>) -> Option<Grid> {
+        (shape.iter().product::<usize>() == values.len()).then(|| Grid {
+            shape,
+            values: values.into(),
+        })
+    }
+}
+
+/// Written as the nested lists `[x][y][z]` an inline field is read from.
+impl Serialize for Grid {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let [_, ny, nz] = self.shape;
+        let planes: Vec<Vec<&[f64]>> = self
+            .values
+            .chunks(ny * nz.max(1))
+            .map(|p| p.chunks(nz.max(1)).collect())
+            .collect();
+        planes.serialize(s)
+    }
 }
 
 /// A reflection coefficient: one number or an RGB triple.

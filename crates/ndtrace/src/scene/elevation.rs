@@ -10,6 +10,7 @@ use super::npz::{read_npy, read_npz_array, ArrayNd};
 use crate::linalg::Vector;
 use crate::mesh::elevation::{elevation_map, gradient_normals, Extent, Field};
 use crate::mesh::Mesh;
+use std::borrow::Cow;
 use std::path::Path;
 
 /// An elevation object's mesh, its per-vertex field values, its smooth normals (in the field's
@@ -89,7 +90,11 @@ pub(crate) fn elevation_object<const N: usize>(
                 "an elevation map needs a field (a file or a 3-D array)",
             ))
         }
-        Some(FieldDesc::Inline(x)) => inline(x, &fpath)?,
+        Some(FieldDesc::Inline(x)) => {
+            let (values, shape) = inline(x, &fpath)?;
+            (Cow::Owned(values), shape)
+        }
+        Some(FieldDesc::Array(g)) => (Cow::Borrowed(&g.values[..]), g.shape),
         Some(FieldDesc::File(file)) => {
             let full = match base {
                 Some(b) => b.join(file),
@@ -110,7 +115,7 @@ pub(crate) fn elevation_object<const N: usize>(
                     ))
                 }
             };
-            (a.data, [nx, ny, nz])
+            (Cow::Owned(a.data), [nx, ny, nz])
         }
     };
     if o.key.is_some()

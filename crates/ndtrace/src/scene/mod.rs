@@ -500,4 +500,31 @@ transform = [{ scale = 0.5 }, { rotate = { quaternions = [[0.6, 0, 0.8, 0], [0.5
             "{e}"
         );
     }
+
+    #[test]
+    fn an_array_field_is_the_inline_field_with_the_same_values() {
+        let text = "dim = 4\n[camera]\nposition = [0.6, 0.8, 1.0, 3.0]\nlook_at = [0, 0, 0, 0]\n\
+                    up = [[0, 1, 0, 0], [0, 0, 1, 0]]\nfov = 50\nresolution = 6\n[[objects]]\n\
+                    shape = \"elevation\"\nfield = [[[0, 1, 2], [1, 0, 3]], [[2, 2, 0], [0.5, 1, 1]]]\n";
+        let (inline, built) = load_toml_str(text, "f.toml", None).unwrap();
+        let values = vec![0.0, 1.0, 2.0, 1.0, 0.0, 3.0, 2.0, 2.0, 0.0, 0.5, 1.0, 1.0];
+        let mut array = inline.clone();
+        array.objects[0].field = Some(desc::FieldDesc::Array(
+            desc::Grid::new([2, 2, 3], values.clone()).unwrap(),
+        ));
+        assert_eq!(array, inline);
+        assert_eq!(inline, array);
+        assert_eq!(to_toml(&array).unwrap(), to_toml(&inline).unwrap());
+        let mut other = values;
+        other[4] = 0.25;
+        let mut changed = inline.clone();
+        changed.objects[0].field = Some(desc::FieldDesc::Array(
+            desc::Grid::new([2, 2, 3], other).unwrap(),
+        ));
+        assert!(changed != inline && changed != array);
+        assert!(desc::Grid::new([2, 2, 2], vec![0.0; 7]).is_none());
+        let from_array = build_desc(&array, "f", None).unwrap();
+        let depth = |s: &AnyScene| with_scene!(s, s, _N => crate::render::trace(s, &Default::default()).unwrap().depth);
+        assert_eq!(depth(&from_array), depth(&built));
+    }
 }
