@@ -377,9 +377,32 @@ def test_loading_a_dict_with_an_array_field_leaves_the_dict_alone():
 ])
 def test_bad_array_fields_in_dicts_give_located_errors(bad, message):
     d = _array_scene(_field()).to_dict()
-    d["objects"][0]["field"] = bad
-    with pytest.raises(ValueError, match=message):
+    d["objects"] = [{"shape": "hypercube"}, d["objects"][0]]
+    d["objects"][1]["field"] = bad
+    with pytest.raises(ValueError, match="^<dict>: " + message.replace("0", "1", 1)):
         ndtrace.load_dict(d)
+    # The builder refuses it at once, naming the object it would be.
+    scene = ndtrace.Scene(4).add_object("hypercube")
+    with pytest.raises(ValueError, match="^" + message.replace("0", "1", 1)):
+        scene.add_object("elevation", field=bad)
+
+
+def test_the_core_loader_reads_a_fortran_ordered_field_in_index_order():
+    f = _field()
+    d = _array_scene(f).to_dict()
+    want = ndtrace.trace(ndtrace.load_dict(d)).depth
+    d["objects"][0]["field"] = np.asfortranarray(f)
+    got = ndtrace.trace(ndtrace.Scene._from_compiled(ndtrace._ndtrace.load_dict(d, "<d>", None, None), None))
+    assert np.array_equal(got.depth, want)
+
+
+def test_a_masked_field_equals_its_copies():
+    f = _field()
+    f[2, 3, 1] = np.nan
+    with pytest.warns(UserWarning, match="holes"):
+        scene = _array_scene(f)
+        scene.compiled()
+        assert scene == scene.copy() == ndtrace.load_dict(scene.to_dict())
 
 
 @pytest.mark.parametrize("bad, message", [

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import warnings
 from typing import Any, Callable, Iterable
 
@@ -31,6 +32,9 @@ from .mesh import _field, _scene_reader, from_object
 
 __all__ = ["Scene", "load_file", "load_dict", "load_toml"]
 
+
+#: Where an elevation field array stays an array (see :func:`_plain`).
+_FIELD_PATH = re.compile(r"objects\[\d+\]\.field")
 
 #: Deeper nesting than any scene has (a list of rows of numbers is three levels).
 MAX_DEPTH = 32
@@ -45,10 +49,12 @@ def _plain(value: Any, path: str = "", depth: int = 0) -> Any:
         raise ValueError(f"{path or 'the scene'}: nested more than {MAX_DEPTH} levels deep "
                          "(a list or dict that contains itself?)")
     if isinstance(value, np.ndarray):
-        if path.rpartition(".")[2] == "field":
+        if _FIELD_PATH.fullmatch(path):
             # A read-only snapshot: the scene must not change when the caller's array does, and
             # copies of the scene can then share it.
-            f = np.array(_field(path, value), dtype=np.float64, order="C", copy=True)
+            f = _field(path, value)
+            if np.may_share_memory(f, value) and (f.flags.writeable or value.flags.writeable):
+                f = f.copy()
             f.setflags(write=False)
             return f
         return value.tolist()
@@ -71,6 +77,23 @@ def _copy_tree(value: Any) -> Any:
     if isinstance(value, np.ndarray) and value.flags.writeable:
         return value.copy()
     return value
+
+
+def _freeze_fields(data: dict) -> dict:
+    """Makes the field arrays of a description read-only (as :func:`_plain` makes them), so
+    that copies share them."""
+    for o in data.get("objects", []):
+        if isinstance(o, dict) and isinstance(o.get("field"), np.ndarray):
+            o["field"].setflags(write=False)
+    return data
+
+
+def _plain_scene(data: Any, name: str) -> Any:
+    """:func:`_plain` of a whole description, its errors prefixed with the scene's name."""
+    try:
+        return _plain(data)
+    except ValueError as e:
+        raise ValueError(f"{name}: {e}") from None
 
 
 def _warn(compiled: _ndtrace.CompiledScene) -> None:
@@ -97,7 +120,7 @@ class Scene:
     def _from_compiled(cls, compiled: _ndtrace.CompiledScene, base: str | None) -> "Scene":
         self = cls.__new__(cls)
         _warn(compiled)
-        self._data = compiled.to_dict()
+        self._data = _freeze_fields(compiled.to_dict())
         self._base = base
         self._compiled = compiled
         return self
@@ -151,7 +174,8 @@ class Scene:
                                  f"got shape {shape!r}")
             vertices, simplices = from_object(shape_keys.pop("mesh"), dim=self.dim)
             shape_keys = {"vertices": vertices, "simplices": simplices, **shape_keys}
-        obj: dict[str, Any] = {"shape": shape, **_plain(shape_keys)}
+        obj: dict[str, Any] = {"shape": shape,
+                               **_plain(shape_keys, f"objects[{len(self._data['objects'])}]")}
         if material is not None:
             obj["material"] = _plain(material)
         if transform is not None:
@@ -175,8 +199,8 @@ class Scene:
     def compiled(self) -> _ndtrace.CompiledScene:
         """The validated, built scene (raises ValueError on a bad description)."""
         if self._compiled is None:
-            self._compiled = _ndtrace.load_dict(_plain(self._data), "<scene>", self._base,
-                                                _scene_reader)
+            self._compiled = _ndtrace.load_dict(_plain_scene(self._data, "<scene>"), "<scene>",
+                                                self._base, _scene_reader)
             _warn(self._compiled)
         return self._compiled
 
@@ -203,7 +227,7 @@ class Scene:
     def copy(self) -> "Scene":
         """An independent copy: its own description (dicts and lists copied, read-only field
         arrays shared) and, until either is changed, the same built scene."""
-        other = Scene.__new__(Scene)
+        other = type(self).__new__(type(self))
         other._data = _copy_tree(self._data)
         other._base = self._base
         other._compiled = self._compiled
@@ -212,13 +236,15 @@ class Scene:
     def __deepcopy__(self, memo: dict) -> "Scene":
         return self.copy()
 
+    __copy__ = copy
+
     def __getstate__(self) -> dict:
         """Pickles the description (and the folder its files resolve against); the built scene
         is rebuilt, on first use, where it is unpickled (for Dask, multiprocessing, Ray)."""
         return {"data": self._data, "base": self._base}
 
     def __setstate__(self, state: dict) -> None:
-        self._data = state["data"]
+        self._data = _freeze_fields(state["data"])
         self._base = state["base"]
         self._compiled = None
 
@@ -260,4 +286,5 @@ def load_dict(data: dict, *, base: str | None = None, name: str = "<dict>") -> S
     """Loads a scene from a dict shaped like the TOML format; arrays may be numpy arrays.
     Relative mesh files resolve against ``base`` (default: the current directory); errors are
     prefixed with ``name``."""
-    return Scene._from_compiled(_ndtrace.load_dict(_plain(data), name, base, _scene_reader), base)
+    return Scene._from_compiled(_ndtrace.load_dict(_plain_scene(data, name), name, base, _scene_reader),
+                                base)

@@ -79,9 +79,11 @@ fn grid(field: &Bound<'_, PyAny>) -> Result<Grid, String> {
             format!("expected a 3-D array indexed [x, y, z], got shape {shape:?}")
         });
     };
-    let values = match f.as_slice() {
-        Ok(s) => s.to_vec(),
-        Err(_) => f.as_array().iter().copied().collect(),
+    // `as_slice` also takes Fortran-ordered memory as it lies: only a C-ordered array's is
+    // the field's C order.
+    let values: std::sync::Arc<[f64]> = match f.as_slice() {
+        Ok(s) if f.is_c_contiguous() => s.into(),
+        _ => f.as_array().iter().copied().collect(),
     };
     Grid::new([shape[0], shape[1], shape[2]], values)
         .ok_or_else(|| format!("an array of shape {shape:?} with a wrong number of values"))
@@ -118,7 +120,7 @@ pub(crate) fn to_dict<'py>(py: Python<'py>, desc: &SceneDesc) -> PyResult<Bound<
     let out = plain(&lean)?;
     let objects = out.get_item("objects")?;
     for (i, g) in arrays {
-        let a = PyArray1::from_slice(py, &g.values).reshape(g.shape)?;
+        let a = PyArray1::from_slice(py, g.values()).reshape(g.shape())?;
         objects.get_item(i)?.set_item("field", a)?;
     }
     Ok(out)

@@ -349,73 +349,88 @@ pub enum FieldDesc {
 }
 
 impl FieldDesc {
-    /// The values of an inline or array field, C-ordered, and its shape (`None` for a file or a
-    /// ragged inline list).
-    fn grid(&self) -> Option<(Vec<f64>, [usize; 3])> {
+    /// The shape and values (C order) of an inline or array field; `None` for a file or a
+    /// ragged inline list.
+    fn cells(&self) -> Option<([usize; 3], Box<dyn Iterator<Item = f64> + '_>)> {
         match self {
             FieldDesc::File(_) => None,
             FieldDesc::Inline(x) => {
-                let (ny, nz) = (
-                    x.first().map_or(0, Vec::len),
-                    x.first().and_then(|p| p.first()).map_or(0, Vec::len),
-                );
+                let ny = x.first().map_or(0, Vec::len);
+                let nz = x.first().and_then(|p| p.first()).map_or(0, Vec::len);
                 let full = x
                     .iter()
                     .all(|p| p.len() == ny && p.iter().all(|r| r.len() == nz));
                 full.then(|| {
+                    let values = x.iter().flatten().flatten().copied();
                     (
-                        x.iter().flatten().flatten().copied().collect(),
                         [x.len(), ny, nz],
+                        Box::new(values) as Box<dyn Iterator<Item = f64>>,
                     )
                 })
             }
-            FieldDesc::Array(g) => Some((g.values.to_vec(), g.shape)),
+            FieldDesc::Array(g) => Some((g.shape, Box::new(g.values.iter().copied()))),
         }
     }
 }
 
 /// Equal descriptions: an array field equals the inline lists with the same values (what it
-/// becomes on a TOML round trip).
+/// becomes on a TOML round trip). Values compare bit for bit, so that a field masked with NaN
+/// equals its copies.
 impl PartialEq for FieldDesc {
     fn eq(&self, other: &Self) -> bool {
         match (self, other) {
             (FieldDesc::File(a), FieldDesc::File(b)) => a == b,
-            (FieldDesc::Inline(a), FieldDesc::Inline(b)) => a == b,
-            (FieldDesc::Array(a), FieldDesc::Array(b)) => a == b,
             (FieldDesc::File(_), _) | (_, FieldDesc::File(_)) => false,
-            _ => self.grid() == other.grid(),
+            _ => match (self.cells(), other.cells()) {
+                (Some((sa, a)), Some((sb, b))) => {
+                    sa == sb && a.map(f64::to_bits).eq(b.map(f64::to_bits))
+                }
+                // Ragged lists (refused when built) compare as lists.
+                _ => {
+                    matches!((self, other), (FieldDesc::Inline(a), FieldDesc::Inline(b)) if a == b)
+                }
+            },
         }
     }
 }
 
 /// A 3-D array of field values, C-ordered (index `[x][y][z]` at `(x·ny + y)·nz + z`), shared
 /// between copies of the description.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Grid {
-    /// `[nx, ny, nz]`.
-    pub shape: [usize; 3],
-    /// `nx·ny·nz` values.
-    pub values: std::sync::Arc<[f64]>,
+    shape: [usize; 3],
+    values: std::sync::Arc<[f64]>,
 }
 
 impl Grid {
-    /// A grid of `values` with `shape`; `None` unless the counts agree.
-    pub fn new(shape: [usize; 3], values: Vec<f64>) -> Option<Grid> {
-        (shape.iter().product::<usize>() == values.len()).then(|| Grid {
-            shape,
-            values: values.into(),
-        })
+    /// A grid of `values` (C order) with `shape`; `None` unless their counts agree.
+    pub fn new(shape: [usize; 3], values: impl Into<std::sync::Arc<[f64]>>) -> Option<Grid> {
+        let values = values.into();
+        let count = shape.iter().try_fold(1usize, |n, &k| n.checked_mul(k));
+        (count == Some(values.len())).then_some(Grid { shape, values })
+    }
+
+    /// `[nx, ny, nz]`.
+    pub fn shape(&self) -> [usize; 3] {
+        self.shape
+    }
+
+    /// The `nx·ny·nz` values, C order.
+    pub fn values(&self) -> &[f64] {
+        &self.values
     }
 }
 
 /// Written as the nested lists `[x][y][z]` an inline field is read from.
 impl Serialize for Grid {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let [_, ny, nz] = self.shape;
-        let planes: Vec<Vec<&[f64]>> = self
-            .values
-            .chunks(ny * nz.max(1))
-            .map(|p| p.chunks(nz.max(1)).collect())
+        let [nx, ny, nz] = self.shape;
+        let planes: Vec<Vec<&[f64]>> = (0..nx)
+            .map(|x| {
+                (0..ny)
+                    .map(|y| &self.values[(x * ny + y) * nz..(x * ny + y + 1) * nz])
+                    .collect()
+            })
             .collect();
         planes.serialize(s)
     }

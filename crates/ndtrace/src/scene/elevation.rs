@@ -94,7 +94,7 @@ pub(crate) fn elevation_object<const N: usize>(
             let (values, shape) = inline(x, &fpath)?;
             (Cow::Owned(values), shape)
         }
-        Some(FieldDesc::Array(g)) => (Cow::Borrowed(&g.values[..]), g.shape),
+        Some(FieldDesc::Array(g)) => (Cow::Borrowed(g.values()), g.shape()),
         Some(FieldDesc::File(file)) => {
             let full = match base {
                 Some(b) => b.join(file),

@@ -523,6 +523,26 @@ transform = [{ scale = 0.5 }, { rotate = { quaternions = [[0.6, 0, 0.8, 0], [0.5
         ));
         assert!(changed != inline && changed != array);
         assert!(desc::Grid::new([2, 2, 2], vec![0.0; 7]).is_none());
+        assert!(desc::Grid::new([1 << 40, 1 << 40, 0], vec![]).is_none());
+        // Masked (NaN) values equal themselves, in copies and across the two forms.
+        let mut masked = inline.clone();
+        if let Some(desc::FieldDesc::Inline(x)) = &mut masked.objects[0].field {
+            x[1][0][2] = f64::NAN;
+        }
+        let mut masked_array = masked.clone();
+        let mut v = vec![0.0, 1.0, 2.0, 1.0, 0.0, 3.0, 2.0, 2.0, 0.0, 0.5, 1.0, 1.0];
+        v[8] = f64::NAN;
+        masked_array.objects[0].field = Some(desc::FieldDesc::Array(
+            desc::Grid::new([2, 2, 3], v).unwrap(),
+        ));
+        assert_eq!(masked_array, masked_array.clone());
+        assert_eq!(masked_array, masked);
+        assert_ne!(masked_array, inline);
+        // Empty axes write as empty lists (the build refuses them; writing must not panic).
+        let empty = desc::Grid::new([2, 0, 3], vec![]).unwrap();
+        let mut text_empty = inline.clone();
+        text_empty.objects[0].field = Some(desc::FieldDesc::Array(empty));
+        assert!(to_toml(&text_empty).unwrap().contains("field = [[], []]"));
         let from_array = build_desc(&array, "f", None).unwrap();
         let depth = |s: &AnyScene| with_scene!(s, s, _N => crate::render::trace(s, &Default::default()).unwrap().depth);
         assert_eq!(depth(&from_array), depth(&built));

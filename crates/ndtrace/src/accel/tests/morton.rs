@@ -209,9 +209,9 @@ fn accel_morton_build_of_a_large_soup_groups_in_parallel_and_matches_brute_force
 fn accel_morton_nodes_are_nearly_full_even_on_a_thin_slab() {
     // Small simplices filling a box that is thin along w (an elevation map's shape): the code's
     // w bits divide almost nothing, and a grouping by fixed bit levels left most nodes half
-    // empty (4.2 children on average at 128³). Counted: children per node and nodes per block.
+    // empty (4.2 children on average at 128³). 80 k simplices: more than PAR_BLOCKS blocks, so the parallel grouping is counted too.
     let mut r = rng(9500);
-    let pts: Vec<[[f64; 4]; 4]> = (0..40_000)
+    let pts: Vec<[[f64; 4]; 4]> = (0..80_000)
         .map(|_| {
             let mut c = random_vector::<4>(&mut r, 1.0);
             c[3] *= 0.01;
