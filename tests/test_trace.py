@@ -1020,7 +1020,9 @@ def test_to_toml_round_trips_awkward_values():
     text = scene.to_toml()
     again = ndtrace.load_toml(text)
     assert again == scene
-    assert again.to_dict() == scene.to_dict()
+    assert again.to_dict(lists=True) == scene.to_dict(lists=True)
+    assert isinstance(scene.to_dict()["objects"][0]["vertices"], np.ndarray)
+    assert isinstance(again.to_dict()["objects"][0]["vertices"], list)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -33,8 +33,33 @@ from .mesh import _field, _scene_reader, from_object
 __all__ = ["Scene", "load_file", "load_dict", "load_toml"]
 
 
-#: Where an elevation field array stays an array (see :func:`_plain`).
-_FIELD_PATH = re.compile(r"objects\[\d+\]\.field")
+#: Where an array stays one array (see :func:`_plain`): an object's key and its dimensions and
+#: dtype (an elevation ``field``; a mesh's or surface's ``vertices``, ``simplices``,
+#: ``triangles`` and per-vertex ``values``).
+_ARRAY_KEYS = {"field": (3, np.float64), "vertices": (2, np.float64), "simplices": (2, np.int64),
+               "triangles": (2, np.int64), "values": (1, np.float64)}
+_ARRAY_PATH = re.compile(r"objects\[\d+\]\.(" + "|".join(_ARRAY_KEYS) + ")")
+
+
+def _snapshot(path: str, key: str, value: np.ndarray) -> np.ndarray | None:
+    """The array at an object's ``key`` as the one C-ordered array the loader takes (a
+    read-only snapshot: the scene must not change when the caller's array does, and copies of
+    the scene can then share it), or None when it is not one (lists then, and the loader says
+    what is wrong)."""
+    ndim, dtype = _ARRAY_KEYS[key]
+    if key == "field":
+        a = _field(path, value)
+    elif value.ndim != ndim or value.dtype.kind not in ("iu" if dtype == np.int64 else "biuf") \
+            or (value.dtype.kind == "u" and value.dtype.itemsize == 8 and value.size
+                and value.max() > np.iinfo(np.int64).max):
+        return None
+    else:
+        a = np.ascontiguousarray(value, dtype=dtype)
+    if np.may_share_memory(a, value) and (a.flags.writeable or value.flags.writeable):
+        a = a.copy()
+    a.setflags(write=False)
+    return a
+
 
 #: Deeper nesting than any scene has (a list of rows of numbers is three levels).
 MAX_DEPTH = 32
@@ -42,21 +67,18 @@ MAX_DEPTH = 32
 
 def _plain(value: Any, path: str = "", depth: int = 0) -> Any:
     """Nested numpy arrays and scalars → lists and Python numbers (for the Rust loader), except
-    an elevation ``field`` array, which stays one C-ordered float64 array (the loader copies its
-    buffer; 2 M numbers as lists would cost about 100 bytes each). A container nested deeper
-    than :data:`MAX_DEPTH` (one that contains itself, say) is a ValueError naming where."""
+    the mesh and field arrays of objects (:data:`_ARRAY_KEYS`), which stay one C-ordered array
+    each (the loader copies its buffer; a million numbers as lists would cost about 100 bytes
+    each). A container nested deeper than :data:`MAX_DEPTH` (one that contains itself, say) is
+    a ValueError naming where."""
     if depth > MAX_DEPTH:
         raise ValueError(f"{path or 'the scene'}: nested more than {MAX_DEPTH} levels deep "
                          "(a list or dict that contains itself?)")
     if isinstance(value, np.ndarray):
-        if _FIELD_PATH.fullmatch(path):
-            # A read-only snapshot: the scene must not change when the caller's array does, and
-            # copies of the scene can then share it.
-            f = _field(path, value)
-            if np.may_share_memory(f, value) and (f.flags.writeable or value.flags.writeable):
-                f = f.copy()
-            f.setflags(write=False)
-            return f
+        if _ARRAY_PATH.fullmatch(path):
+            a = _snapshot(path, path.rsplit(".", 1)[1], value)
+            if a is not None:
+                return a
         return value.tolist()
     if isinstance(value, np.generic):
         return value.item()
@@ -79,12 +101,14 @@ def _copy_tree(value: Any) -> Any:
     return value
 
 
-def _freeze_fields(data: dict) -> dict:
-    """Makes the field arrays of a description read-only (as :func:`_plain` makes them), so
+def _freeze_arrays(data: dict) -> dict:
+    """Makes the arrays of a description's objects read-only (as :func:`_plain` makes them), so
     that copies share them."""
     for o in data.get("objects", []):
-        if isinstance(o, dict) and isinstance(o.get("field"), np.ndarray):
-            o["field"].setflags(write=False)
+        if isinstance(o, dict):
+            for key in _ARRAY_KEYS:
+                if isinstance(o.get(key), np.ndarray):
+                    o[key].setflags(write=False)
     return data
 
 
@@ -120,7 +144,7 @@ class Scene:
     def _from_compiled(cls, compiled: _ndtrace.CompiledScene, base: str | None) -> "Scene":
         self = cls.__new__(cls)
         _warn(compiled)
-        self._data = _freeze_fields(compiled.to_dict())
+        self._data = _freeze_arrays(compiled.to_dict())
         self._base = base
         self._compiled = compiled
         return self
@@ -216,9 +240,11 @@ class Scene:
     def retina_shape(self) -> tuple[int, ...]:
         return tuple(self.compiled().retina_shape)
 
-    def to_dict(self) -> dict:
-        """The full description with every default filled in."""
-        return self.compiled().to_dict()
+    def to_dict(self, *, lists: bool = False) -> dict:
+        """The full description with every default filled in. Mesh and field arrays given as
+        numpy arrays come back as numpy arrays (copies), without a trip through lists;
+        ``lists=True`` gives nested lists instead (plain data, e.g. for JSON)."""
+        return self.compiled().to_dict(lists)
 
     def to_toml(self) -> str:
         """The description as TOML; ``load_toml(scene.to_toml())`` gives an equal scene."""
@@ -244,7 +270,7 @@ class Scene:
         return {"data": self._data, "base": self._base}
 
     def __setstate__(self, state: dict) -> None:
-        self._data = _freeze_fields(state["data"])
+        self._data = _freeze_arrays(state["data"])
         self._base = state["base"]
         self._compiled = None
 

@@ -2,25 +2,83 @@
 //! nested lists (which cost a Python float and a serde value per number): taken out of the dict
 //! before it is deserialized, and put back as numpy arrays by `to_dict`.
 //!
-//! Today that is an elevation object's `field` (a 128³ field is 2 M numbers).
+//! The keys of an object that may hold an array, and its form, are [`KEYS`]: an elevation
+//! map's `field`, a mesh's or surface's `vertices`, `simplices`, `triangles` and `values`.
 
-use ndtrace::scene::desc::{FieldDesc, Grid};
+use ndtrace::scene::desc::{Column, FieldDesc, Grid, ObjectDesc, Rows, Table};
 use ndtrace::scene::SceneDesc;
 use ndtrace::NdError;
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray3, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::ndarray::ArrayViewD;
+use numpy::{
+    Element, PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use std::sync::Arc;
 
-/// An array field taken out of `objects[index]`.
-pub(crate) struct Taken {
-    index: usize,
-    grid: Grid,
+/// An object key that may hold a numpy array: its dimensions and element type.
+struct Key {
+    name: &'static str,
+    ndim: usize,
+    float: bool,
+    /// What the array's axes index, for errors.
+    axes: &'static str,
 }
 
-/// `data` without its numpy `objects[i].field` arrays (shallow copies where one was taken; the
-/// caller's dicts are not changed), and the arrays taken. An array must be 3-D float64 (the
-/// Python wrapper converts numeric dtypes); errors name `name` and the field's path.
-pub(crate) fn take_fields<'py>(
+/// The array keys of an object.
+static KEYS: [Key; 5] = [
+    Key {
+        name: "field",
+        ndim: 3,
+        float: true,
+        axes: "[x, y, z]",
+    },
+    Key {
+        name: "vertices",
+        ndim: 2,
+        float: true,
+        axes: "(vertex, coordinate)",
+    },
+    Key {
+        name: "simplices",
+        ndim: 2,
+        float: false,
+        axes: "(simplex, vertex)",
+    },
+    Key {
+        name: "triangles",
+        ndim: 2,
+        float: false,
+        axes: "(triangle, vertex)",
+    },
+    Key {
+        name: "values",
+        ndim: 1,
+        float: true,
+        axes: "(vertex,)",
+    },
+];
+
+/// An array's numbers, copied once into the description, by key.
+enum Payload {
+    Field(Grid),
+    Vertices(Table<f64>),
+    Simplices(Table<i64>),
+    Triangles(Table<i64>),
+    Values(Arc<[f64]>),
+}
+
+/// An array taken out of `objects[index]`.
+pub(crate) struct Taken {
+    index: usize,
+    payload: Payload,
+}
+
+/// `data` without its numpy arrays at the [`KEYS`] of its objects (shallow copies where one
+/// was taken; the caller's dicts are not changed), and the arrays taken. An array must have
+/// the key's dimensions and be float64 (or int64 for indices; the Python wrapper converts
+/// other numeric dtypes); errors name `name` and the array's path.
+pub(crate) fn take_arrays<'py>(
     data: &Bound<'py, PyAny>,
     name: &str,
 ) -> PyResult<(Bound<'py, PyAny>, Vec<Taken>)> {
@@ -37,27 +95,37 @@ pub(crate) fn take_fields<'py>(
     let mut taken = Vec::new();
     let copies = PyList::empty(py);
     for (index, o) in objects.iter().enumerate() {
-        let field = match o.cast::<PyDict>() {
-            Ok(d) => d
-                .get_item("field")?
-                .filter(|f| f.cast::<PyUntypedArray>().is_ok()),
-            Err(_) => None,
-        };
-        let Some(field) = field else {
+        let Ok(d) = o.cast::<PyDict>() else {
             copies.append(o)?;
             continue;
         };
-        let grid = grid(&field).map_err(|message| {
-            crate::errors::to_py_err(NdError::Scene {
-                location: name.to_string(),
-                path: format!("objects[{index}].field"),
-                message,
-            })
-        })?;
-        let copy = o.cast::<PyDict>()?.copy()?;
-        copy.set_item("field", py.None())?;
-        copies.append(copy)?;
-        taken.push(Taken { index, grid });
+        let mut copy: Option<Bound<'py, PyDict>> = None;
+        for key in &KEYS {
+            let Some(value) = d.get_item(key.name)? else {
+                continue;
+            };
+            if value.cast::<PyUntypedArray>().is_err() {
+                continue;
+            }
+            let payload = payload(&value, key).map_err(|message| {
+                crate::errors::to_py_err(NdError::Scene {
+                    location: name.to_string(),
+                    path: format!("objects[{index}].{}", key.name),
+                    message,
+                })
+            })?;
+            let c = match copy.take() {
+                Some(c) => c,
+                None => d.copy()?,
+            };
+            c.set_item(key.name, py.None())?;
+            copy = Some(c);
+            taken.push(Taken { index, payload });
+        }
+        match copy {
+            Some(c) => copies.append(c)?,
+            None => copies.append(o)?,
+        }
     }
     if taken.is_empty() {
         return Ok((data.clone(), taken));
@@ -67,61 +135,138 @@ pub(crate) fn take_fields<'py>(
     Ok((top.into_any(), taken))
 }
 
-/// A 3-D float64 array's values, copied once into the description (C order whatever the
-/// array's strides).
-fn grid(field: &Bound<'_, PyAny>) -> Result<Grid, String> {
-    let a = field.cast::<PyUntypedArray>().map_err(|e| e.to_string())?;
+/// The numbers of an array at `key`, C order whatever its strides.
+fn payload(value: &Bound<'_, PyAny>, key: &Key) -> Result<Payload, String> {
+    let a = value.cast::<PyUntypedArray>().map_err(|e| e.to_string())?;
     let shape = a.shape().to_vec();
-    let Ok(f) = field.extract::<PyReadonlyArray3<'_, f64>>() else {
-        return Err(if shape.len() == 3 {
-            format!("expected a float64 array, got dtype {}", a.dtype())
-        } else {
-            format!("expected a 3-D array indexed [x, y, z], got shape {shape:?}")
-        });
+    if shape.len() != key.ndim {
+        return Err(format!(
+            "expected a {}-D array indexed {}, got shape {shape:?}",
+            key.ndim, key.axes
+        ));
+    }
+    let wrong_dtype = || {
+        let want = if key.float { "a float64" } else { "an int64" };
+        format!("expected {want} array, got dtype {}", a.dtype())
     };
-    // `as_slice` also takes Fortran-ordered memory as it lies: only a C-ordered array's is
-    // the field's C order.
-    let values: std::sync::Arc<[f64]> = match f.as_slice() {
-        Ok(s) if f.is_c_contiguous() => s.into(),
-        _ => f.as_array().iter().copied().collect(),
-    };
-    Grid::new([shape[0], shape[1], shape[2]], values)
-        .ok_or_else(|| format!("an array of shape {shape:?} with a wrong number of values"))
+    if key.float {
+        let values = flat::<f64>(value).ok_or_else(wrong_dtype)?;
+        Ok(match key.name {
+            "field" => Payload::Field(
+                Grid::new([shape[0], shape[1], shape[2]], values).ok_or_else(|| {
+                    format!("an array of shape {shape:?} with a wrong number of values")
+                })?,
+            ),
+            "vertices" => Payload::Vertices(table(shape[1], values)?),
+            _ => Payload::Values(values),
+        })
+    } else {
+        let t = table(shape[1], flat::<i64>(value).ok_or_else(wrong_dtype)?)?;
+        Ok(match key.name {
+            "simplices" => Payload::Simplices(t),
+            _ => Payload::Triangles(t),
+        })
+    }
 }
 
-/// Puts the fields taken by [`take_fields`] into the deserialized description.
-pub(crate) fn put_fields(desc: &mut SceneDesc, taken: Vec<Taken>) {
+fn table<T: ndtrace::scene::table::Number>(
+    width: usize,
+    values: Arc<[T]>,
+) -> Result<Table<T>, String> {
+    let rows = values.len().checked_div(width).unwrap_or(0);
+    Table::new(width, values)
+        .ok_or_else(|| format!("an array of {rows} rows of {width} with a wrong number of values"))
+}
+
+/// An array of `T` copied once into a shared buffer, C order; `None` for another dtype.
+fn flat<T: Element + Copy>(value: &Bound<'_, PyAny>) -> Option<Arc<[T]>> {
+    let a = value.extract::<PyReadonlyArrayDyn<'_, T>>().ok()?;
+    // `as_slice` also takes Fortran-ordered memory as it lies: only a C-ordered array's is
+    // its C order.
+    Some(match a.as_slice() {
+        Ok(s) if a.is_c_contiguous() => s.into(),
+        _ => {
+            let view: ArrayViewD<'_, T> = a.as_array();
+            view.iter().copied().collect()
+        }
+    })
+}
+
+/// Puts the arrays taken by [`take_arrays`] into the deserialized description.
+pub(crate) fn put_arrays(desc: &mut SceneDesc, taken: Vec<Taken>) {
     for t in taken {
-        if let Some(o) = desc.objects.get_mut(t.index) {
-            o.field = Some(FieldDesc::Array(t.grid));
+        let Some(o) = desc.objects.get_mut(t.index) else {
+            continue;
+        };
+        match t.payload {
+            Payload::Field(g) => o.field = Some(FieldDesc::Array(g)),
+            Payload::Vertices(v) => o.vertices = Some(Rows::Array(v)),
+            Payload::Simplices(s) => o.simplices = Some(Rows::Array(s)),
+            Payload::Triangles(t) => o.triangles = Some(Rows::Array(t)),
+            Payload::Values(v) => o.values = Some(Column::Array(v)),
         }
     }
 }
 
-/// `desc` as plain Python data with array fields as numpy arrays (no nested lists).
+/// The arrays of an object, by key, as numpy arrays (and the object without them).
+fn object_arrays<'py>(
+    py: Python<'py>,
+    o: &mut ObjectDesc,
+) -> PyResult<Vec<(&'static str, Bound<'py, PyAny>)>> {
+    fn rows<'py, T: Element + ndtrace::scene::table::Number>(
+        py: Python<'py>,
+        t: &Table<T>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        Ok(PyArray1::from_slice(py, t.values())
+            .reshape([t.rows(), t.width()])?
+            .into_any())
+    }
+    let mut out = Vec::new();
+    if let Some(FieldDesc::Array(g)) = &o.field {
+        out.push((
+            "field",
+            PyArray1::from_slice(py, g.values())
+                .reshape(g.shape())?
+                .into_any(),
+        ));
+        o.field = None;
+    }
+    if let Some(Rows::Array(t)) = &o.vertices {
+        out.push(("vertices", rows(py, t)?));
+        o.vertices = None;
+    }
+    if let Some(Rows::Array(t)) = &o.simplices {
+        out.push(("simplices", rows(py, t)?));
+        o.simplices = None;
+    }
+    if let Some(Rows::Array(t)) = &o.triangles {
+        out.push(("triangles", rows(py, t)?));
+        o.triangles = None;
+    }
+    if let Some(Column::Array(v)) = &o.values {
+        out.push(("values", PyArray1::from_slice(py, v).into_any()));
+        o.values = None;
+    }
+    Ok(out)
+}
+
+/// `desc` as plain Python data with its arrays as numpy arrays (no nested lists).
 pub(crate) fn to_dict<'py>(py: Python<'py>, desc: &SceneDesc) -> PyResult<Bound<'py, PyAny>> {
-    let arrays: Vec<(usize, &Grid)> = (desc.objects.iter().enumerate())
-        .filter_map(|(i, o)| match &o.field {
-            Some(FieldDesc::Array(g)) => Some((i, g)),
-            _ => None,
-        })
-        .collect();
-    let plain = |d: &SceneDesc| {
-        pythonize::pythonize(py, d)
-            .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))
-    };
-    if arrays.is_empty() {
-        return plain(desc);
-    }
+    // A clone shares the arrays' buffers; the arrays are taken out of it before pythonize.
     let mut lean = desc.clone();
-    for &(i, _) in &arrays {
-        lean.objects[i].field = None;
+    let mut arrays = Vec::new();
+    for (i, o) in lean.objects.iter_mut().enumerate() {
+        for (key, a) in object_arrays(py, o)? {
+            arrays.push((i, key, a));
+        }
     }
-    let out = plain(&lean)?;
-    let objects = out.get_item("objects")?;
-    for (i, g) in arrays {
-        let a = PyArray1::from_slice(py, g.values()).reshape(g.shape())?;
-        objects.get_item(i)?.set_item("field", a)?;
+    let out = pythonize::pythonize(py, &lean)
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+    if !arrays.is_empty() {
+        let objects = out.get_item("objects")?;
+        for (i, key, a) in arrays {
+            objects.get_item(i)?.set_item(key, a)?;
+        }
     }
     Ok(out)
 }

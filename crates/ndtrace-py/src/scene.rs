@@ -138,9 +138,14 @@ impl CompiledScene {
         scene::to_toml(&self.desc).map_err(to_py_err)
     }
 
-    /// The description as plain Python data (dicts, lists, numbers, strings; an elevation
-    /// field given as an array stays a numpy array).
-    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    /// The description as plain Python data (dicts, lists, numbers, strings; mesh and field
+    /// arrays given as numpy arrays stay arrays unless `lists`).
+    #[pyo3(signature = (lists = false))]
+    fn to_dict<'py>(&self, py: Python<'py>, lists: bool) -> PyResult<Bound<'py, PyAny>> {
+        if lists {
+            return pythonize::pythonize(py, &self.desc)
+                .map_err(|e| PyValueError::new_err(e.to_string()));
+        }
         crate::arrays::to_dict(py, &self.desc)
     }
 
@@ -367,7 +372,7 @@ fn load_dict(
     reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
     let reader = PyMeshReader::new(reader);
-    let (data, arrays) = crate::arrays::take_fields(data, name)?;
+    let (data, arrays) = crate::arrays::take_arrays(data, name)?;
     let mut de = pythonize::Depythonizer::from_object(&data);
     let mut desc = scene::deserialize(&mut de).map_err(|e| {
         to_py_err(NdError::Scene {
@@ -376,7 +381,7 @@ fn load_dict(
             message: e.message,
         })
     })?;
-    crate::arrays::put_fields(&mut desc, arrays);
+    crate::arrays::put_arrays(&mut desc, arrays);
     let scene = py.detach(|| {
         guarded("load_dict", || {
             scene::build_desc_with(&desc, name, base.as_deref(), as_reader(&reader))

@@ -4,7 +4,6 @@
 use super::collapse::{id_ranges, wide_tree};
 use super::simplex::{simplex_bounds, Bounds, PreparedSimplex};
 use super::tree::{f32_down, f32_up, half_area, BinaryNode, Bvh, BLOCK_WIDTH, LEAF_TAG, MAX_LEAF};
-use crate::linalg::Vector;
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 
@@ -23,23 +22,52 @@ const PAR_CHUNK: usize = 8 * 1024;
 /// `diameter ≤ √N·max extent ≤ 3·max extent`).
 pub(crate) const BOX_PAD: f64 = 1e-8;
 
-/// The bounding box and the box of the centroids of a set of simplices: what the split of the
-/// node over them needs.
+/// A simplex during the build: its padded box rounded outward to f32 and its input index.
+/// The build partitions these records in place, so every pass over a node reads memory in
+/// order (not through an index array).
+#[derive(Clone, Copy)]
+struct Ref<const N: usize> {
+    lo: [f32; N],
+    hi: [f32; N],
+    id: u32,
+}
+
+impl<const N: usize> Ref<N> {
+    /// Twice the box centre on axis `a` (the factor 2 cancels in the binning).
+    #[inline(always)]
+    fn centre2(&self, a: usize) -> f32 {
+        self.lo[a] + self.hi[a]
+    }
+}
+
+/// The bounding box and the box of the (doubled) centres of a set of simplices: what the
+/// split of the node over them needs.
 #[derive(Clone, Copy)]
 struct NodeBounds<const N: usize> {
-    bmin: Vector<N>,
-    bmax: Vector<N>,
-    cmin: Vector<N>,
-    cmax: Vector<N>,
+    bmin: [f32; N],
+    bmax: [f32; N],
+    cmin: [f32; N],
+    cmax: [f32; N],
 }
 
 impl<const N: usize> NodeBounds<N> {
     fn empty() -> Self {
         NodeBounds {
-            bmin: [f64::INFINITY; N],
-            bmax: [f64::NEG_INFINITY; N],
-            cmin: [f64::INFINITY; N],
-            cmax: [f64::NEG_INFINITY; N],
+            bmin: [f32::INFINITY; N],
+            bmax: [f32::NEG_INFINITY; N],
+            cmin: [f32::INFINITY; N],
+            cmax: [f32::NEG_INFINITY; N],
+        }
+    }
+
+    #[inline(always)]
+    fn grow(&mut self, r: &Ref<N>) {
+        for i in 0..N {
+            self.bmin[i] = self.bmin[i].min(r.lo[i]);
+            self.bmax[i] = self.bmax[i].max(r.hi[i]);
+            let c = r.centre2(i);
+            self.cmin[i] = self.cmin[i].min(c);
+            self.cmax[i] = self.cmax[i].max(c);
         }
     }
 
@@ -52,30 +80,42 @@ impl<const N: usize> NodeBounds<N> {
         }
         self
     }
+
+    fn of(refs: &[Ref<N>]) -> Self {
+        let mut b = Self::empty();
+        for r in refs {
+            b.grow(r);
+        }
+        b
+    }
 }
 
-/// One SAH bin: count and bounds of the simplices whose centroid falls in it.
+/// One SAH bin: count and bounds of the simplices whose centre falls in it.
 #[derive(Clone, Copy)]
 struct SahBin<const N: usize> {
     count: u32,
-    min: Vector<N>,
-    max: Vector<N>,
+    min: [f32; N],
+    max: [f32; N],
 }
 
 impl<const N: usize> SahBin<N> {
     const EMPTY: Self = SahBin {
         count: 0,
-        min: [f64::INFINITY; N],
-        max: [f64::NEG_INFINITY; N],
+        min: [f32::INFINITY; N],
+        max: [f32::NEG_INFINITY; N],
     };
 
-    #[inline]
-    fn grow(&mut self, lo: &Vector<N>, hi: &Vector<N>, count: u32) {
+    #[inline(always)]
+    fn grow(&mut self, lo: &[f32; N], hi: &[f32; N], count: u32) {
         self.count += count;
         for i in 0..N {
             self.min[i] = self.min[i].min(lo[i]);
             self.max[i] = self.max[i].max(hi[i]);
         }
+    }
+
+    fn half_area(&self) -> f64 {
+        half_area(&self.min.map(f64::from), &self.max.map(f64::from))
     }
 }
 
@@ -88,37 +128,30 @@ fn blocks_of(n: u32) -> f64 {
     n.div_ceil(BLOCK_WIDTH as u32) as f64
 }
 
-/// The bin of a centroid coordinate: `⌊(c − cmin)·scale⌋` clamped to the last bin. The same
-/// function bins and partitions, so both agree exactly.
+/// The bin of a doubled centre coordinate: `⌊(c − cmin)·scale⌋` clamped to the last bin. The
+/// same function bins and partitions, so both agree exactly.
 #[inline(always)]
-fn bin_of(c: f64, cmin: f64, scale: f64) -> usize {
+fn bin_of(c: f32, cmin: f32, scale: f32) -> usize {
     (((c - cmin) * scale) as usize).min(BINS - 1)
 }
 
-/// Reorders `idx` so that the elements satisfying `left` come first; returns their number.
-fn partition(idx: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
-    let (mut i, mut j) = (0, idx.len());
+/// Reorders `refs` so that the records satisfying `left` come first; returns their number.
+fn partition<const N: usize>(refs: &mut [Ref<N>], left: impl Fn(&Ref<N>) -> bool) -> usize {
+    let (mut i, mut j) = (0, refs.len());
     loop {
-        while i < j && left(idx[i]) {
+        while i < j && left(&refs[i]) {
             i += 1;
         }
-        while i < j && !left(idx[j - 1]) {
+        while i < j && !left(&refs[j - 1]) {
             j -= 1;
         }
         if i >= j {
             return i;
         }
-        idx.swap(i, j - 1);
+        refs.swap(i, j - 1);
         i += 1;
         j -= 1;
     }
-}
-
-/// Build inputs: padded bounds and centroids of every simplex (by input index).
-struct Builder<const N: usize> {
-    bounds: Vec<(Vector<N>, Vector<N>)>,
-    cent: Vec<Vector<N>>,
-    par_min: usize,
 }
 
 /// A binary subtree built in parallel: either a flat run of nodes (child indices relative to its
@@ -129,42 +162,30 @@ enum BuiltSubtree<const N: usize> {
     Split(BinaryNode<N>, Box<BuiltSubtree<N>>, Box<BuiltSubtree<N>>),
 }
 
-impl<const N: usize> Builder<N> {
-    fn info_seq(&self, idx: &[u32]) -> NodeBounds<N> {
-        let mut info = NodeBounds::empty();
-        for &p in idx {
-            let (lo, hi) = &self.bounds[p as usize];
-            let c = &self.cent[p as usize];
-            for i in 0..N {
-                info.bmin[i] = info.bmin[i].min(lo[i]);
-                info.bmax[i] = info.bmax[i].max(hi[i]);
-                info.cmin[i] = info.cmin[i].min(c[i]);
-                info.cmax[i] = info.cmax[i].max(c[i]);
-            }
-        }
-        info
-    }
+/// The build's one setting: nodes with at least `par_min` simplices are built in parallel.
+struct Builder {
+    par_min: usize,
+}
 
-    /// Bounds and centroid bounds; min/max are exact, so the parallel reduction gives the same
+impl Builder {
+    /// Bounds and centre bounds; min/max are exact, so the parallel reduction gives the same
     /// result as the sequential loop.
-    fn info(&self, idx: &[u32]) -> NodeBounds<N> {
-        if idx.len() >= self.par_min.max(2 * PAR_CHUNK) {
-            idx.par_chunks(PAR_CHUNK)
-                .map(|c| self.info_seq(c))
+    fn info<const N: usize>(&self, refs: &[Ref<N>]) -> NodeBounds<N> {
+        if refs.len() >= self.par_min.max(2 * PAR_CHUNK) {
+            refs.par_chunks(PAR_CHUNK)
+                .map(NodeBounds::of)
                 .reduce(NodeBounds::empty, NodeBounds::merge)
         } else {
-            self.info_seq(idx)
+            NodeBounds::of(refs)
         }
     }
 
-    fn bin_seq(&self, idx: &[u32], cmin: &Vector<N>, scale: &Vector<N>) -> SahBins<N> {
+    fn bin_seq<const N: usize>(refs: &[Ref<N>], cmin: &[f32; N], scale: &[f32; N]) -> SahBins<N> {
         let mut bins = [[SahBin::EMPTY; BINS]; N];
-        for &p in idx {
-            let (lo, hi) = &self.bounds[p as usize];
-            let c = &self.cent[p as usize];
+        for r in refs {
             for a in 0..N {
                 if scale[a] > 0.0 {
-                    bins[a][bin_of(c[a], cmin[a], scale[a])].grow(lo, hi, 1);
+                    bins[a][bin_of(r.centre2(a), cmin[a], scale[a])].grow(&r.lo, &r.hi, 1);
                 }
             }
         }
@@ -172,10 +193,15 @@ impl<const N: usize> Builder<N> {
     }
 
     /// The SAH bins; counts and min/max are exact, so the parallel reduction is deterministic.
-    fn bins(&self, idx: &[u32], cmin: &Vector<N>, scale: &Vector<N>) -> SahBins<N> {
-        if idx.len() >= self.par_min.max(2 * PAR_CHUNK) {
-            idx.par_chunks(PAR_CHUNK)
-                .map(|c| self.bin_seq(c, cmin, scale))
+    fn bins<const N: usize>(
+        &self,
+        refs: &[Ref<N>],
+        cmin: &[f32; N],
+        scale: &[f32; N],
+    ) -> SahBins<N> {
+        if refs.len() >= self.par_min.max(2 * PAR_CHUNK) {
+            refs.par_chunks(PAR_CHUNK)
+                .map(|c| Self::bin_seq(c, cmin, scale))
                 .reduce(
                     || [[SahBin::EMPTY; BINS]; N],
                     |mut a, b| {
@@ -188,28 +214,33 @@ impl<const N: usize> Builder<N> {
                     },
                 )
         } else {
-            self.bin_seq(idx, cmin, scale)
+            Self::bin_seq(refs, cmin, scale)
         }
     }
 
-    /// Chooses how to split the node over `idx` and partitions `idx` accordingly: `None` for a
+    /// Chooses how to split the node over `refs` and partitions them accordingly: `None` for a
     /// leaf (at most `MAX_LEAF` simplices: a block tests them at the price of one), `Some(mid)`
-    /// for children `idx[..mid]` and `idx[mid..]` (both non-empty).
-    fn split(&self, idx: &mut [u32], info: &NodeBounds<N>, depth: usize) -> Option<usize> {
-        let n = idx.len();
+    /// for children `refs[..mid]` and `refs[mid..]` (both non-empty).
+    fn split<const N: usize>(
+        &self,
+        refs: &mut [Ref<N>],
+        info: &NodeBounds<N>,
+        depth: usize,
+    ) -> Option<usize> {
+        let n = refs.len();
         if n <= MAX_LEAF {
             return None;
         }
-        let mut scale = [0.0; N];
+        let mut scale = [0.0f32; N];
         for a in 0..N {
             let ext = info.cmax[a] - info.cmin[a];
-            let s = BINS as f64 / ext;
+            let s = BINS as f32 / ext;
             if ext > 0.0 && s.is_finite() {
                 scale[a] = s;
             }
         }
         if depth < MAX_SAH_DEPTH && scale.iter().any(|&s| s > 0.0) {
-            let bins = self.bins(idx, &info.cmin, &scale);
+            let bins = self.bins(refs, &info.cmin, &scale);
             // (cost, axis, first bin of the right side); ties keep the first candidate.
             let mut best: Option<(f64, usize, usize)> = None;
             for a in 0..N {
@@ -222,7 +253,7 @@ impl<const N: usize> Builder<N> {
                 for s in (1..BINS).rev() {
                     let b = &bins[a][s];
                     acc.grow(&b.min, &b.max, b.count);
-                    right_cost[s] = half_area(&acc.min, &acc.max) * blocks_of(acc.count);
+                    right_cost[s] = acc.half_area() * blocks_of(acc.count);
                 }
                 let mut left = SahBin::EMPTY;
                 for s in 1..BINS {
@@ -232,8 +263,7 @@ impl<const N: usize> Builder<N> {
                     if n_left == 0 || n_left == n {
                         continue;
                     }
-                    let cost =
-                        half_area(&left.min, &left.max) * blocks_of(left.count) + right_cost[s];
+                    let cost = left.half_area() * blocks_of(left.count) + right_cost[s];
                     if best.is_none_or(|(c, _, _)| cost < c) {
                         best = Some((cost, a, s));
                     }
@@ -241,12 +271,12 @@ impl<const N: usize> Builder<N> {
             }
             if let Some((_, a, s)) = best {
                 let (cmin, sc) = (info.cmin[a], scale[a]);
-                let mid = partition(idx, |p| bin_of(self.cent[p as usize][a], cmin, sc) < s);
+                let mid = partition(refs, |r| bin_of(r.centre2(a), cmin, sc) < s);
                 debug_assert!(mid > 0 && mid < n);
                 return Some(mid);
             }
         }
-        // Object-median split on the axis of largest centroid extent (ties: lowest axis, then
+        // Object-median split on the axis of largest centre extent (ties: lowest axis, then
         // input index), which always splits and halves the count.
         let mut axis = 0;
         for a in 1..N {
@@ -255,43 +285,42 @@ impl<const N: usize> Builder<N> {
             }
         }
         let mid = n / 2;
-        let cent = &self.cent;
-        idx.select_nth_unstable_by(mid, |&p, &q| {
-            cent[p as usize][axis]
-                .total_cmp(&cent[q as usize][axis])
-                .then(p.cmp(&q))
+        refs.select_nth_unstable_by(mid, |p, q| {
+            p.centre2(axis)
+                .total_cmp(&q.centre2(axis))
+                .then(p.id.cmp(&q.id))
         });
         Some(mid)
     }
 
-    fn node(info: &NodeBounds<N>) -> BinaryNode<N> {
+    fn node<const N: usize>(info: &NodeBounds<N>) -> BinaryNode<N> {
         BinaryNode {
-            min: std::array::from_fn(|i| f32_down(info.bmin[i])),
-            max: std::array::from_fn(|i| f32_up(info.bmax[i])),
+            min: info.bmin,
+            max: info.bmax,
             first: 0,
             count: 0,
         }
     }
 
-    /// Sequential build of the subtree over `idx` (at position `offset` of the final order),
+    /// Sequential build of the subtree over `refs` (at position `offset` of the final order),
     /// appending to `out` with node indices relative to the start of `out`.
-    fn build_seq(
+    fn build_seq<const N: usize>(
         &self,
-        idx: &mut [u32],
+        refs: &mut [Ref<N>],
         offset: usize,
         depth: usize,
         out: &mut Vec<BinaryNode<N>>,
     ) {
-        let info = self.info_seq(idx);
+        let info = NodeBounds::of(refs);
         let me = out.len();
         out.push(Self::node(&info));
-        match self.split(idx, &info, depth) {
+        match self.split(refs, &info, depth) {
             None => {
                 out[me].first = offset as u32;
-                out[me].count = idx.len() as u32;
+                out[me].count = refs.len() as u32;
             }
             Some(mid) => {
-                let (l, r) = idx.split_at_mut(mid);
+                let (l, r) = refs.split_at_mut(mid);
                 self.build_seq(l, offset, depth + 1, out);
                 out[me].first = out.len() as u32;
                 self.build_seq(r, offset + mid, depth + 1, out);
@@ -299,23 +328,28 @@ impl<const N: usize> Builder<N> {
         }
     }
 
-    /// Build of the subtree over `idx`, forking with rayon for large nodes.
-    fn build_par(&self, idx: &mut [u32], offset: usize, depth: usize) -> BuiltSubtree<N> {
-        if idx.len() < self.par_min {
-            let mut out = Vec::with_capacity(idx.len() / 2 + 1);
-            self.build_seq(idx, offset, depth, &mut out);
+    /// Build of the subtree over `refs`, forking with rayon for large nodes.
+    fn build_par<const N: usize>(
+        &self,
+        refs: &mut [Ref<N>],
+        offset: usize,
+        depth: usize,
+    ) -> BuiltSubtree<N> {
+        if refs.len() < self.par_min {
+            let mut out = Vec::with_capacity(refs.len() / 2 + 1);
+            self.build_seq(refs, offset, depth, &mut out);
             return BuiltSubtree::Flat(out);
         }
-        let info = self.info(idx);
+        let info = self.info(refs);
         let mut node = Self::node(&info);
-        match self.split(idx, &info, depth) {
+        match self.split(refs, &info, depth) {
             None => {
                 node.first = offset as u32;
-                node.count = idx.len() as u32;
+                node.count = refs.len() as u32;
                 BuiltSubtree::Flat(vec![node])
             }
             Some(mid) => {
-                let (l, r) = idx.split_at_mut(mid);
+                let (l, r) = refs.split_at_mut(mid);
                 let (bl, br) = rayon::join(
                     || self.build_par(l, offset, depth + 1),
                     || self.build_par(r, offset + mid, depth + 1),
@@ -349,37 +383,34 @@ fn flatten<const N: usize>(b: BuiltSubtree<N>, out: &mut Vec<BinaryNode<N>>) {
 }
 
 /// The binary SAH tree over the simplices of the given bounds (each padded by [`BOX_PAD`] of
-/// its largest extent), in depth-first order, and the leaf order (`idx[j]`: the input index of
-/// the j-th simplex in leaf order). Forks with rayon above `par_min` simplices.
+/// its largest extent and rounded outward to f32), in depth-first order, and the leaf order
+/// (`idx[j]`: the input index of the j-th simplex in leaf order). Forks with rayon above
+/// `par_min` simplices.
 pub(super) fn binary_tree<const N: usize>(
     bounds: Vec<Bounds<N>>,
     par_min: usize,
 ) -> (Vec<BinaryNode<N>>, Vec<u32>) {
-    let n = bounds.len();
     // Pad each box by BOX_PAD of its largest extent, so that it contains the BARY_SLACK band.
-    let padded: Vec<(Vector<N>, Vector<N>)> = bounds
-        .into_iter()
-        .map(|(lo, hi)| {
+    let mut refs: Vec<Ref<N>> = bounds
+        .par_iter()
+        .enumerate()
+        .map(|(id, (lo, hi))| {
             let ext = (0..N).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
             let pad = BOX_PAD * ext;
-            (
-                std::array::from_fn(|i| lo[i] - pad),
-                std::array::from_fn(|i| hi[i] + pad),
-            )
+            Ref {
+                lo: std::array::from_fn(|i| f32_down(lo[i] - pad)),
+                hi: std::array::from_fn(|i| f32_up(hi[i] + pad)),
+                id: id as u32,
+            }
         })
         .collect();
-    let cent = padded
-        .iter()
-        .map(|(lo, hi)| std::array::from_fn(|i| 0.5 * (lo[i] + hi[i])))
-        .collect();
+    drop(bounds);
     let builder = Builder {
-        bounds: padded,
-        cent,
         par_min: par_min.max(2),
     };
-    let mut idx: Vec<u32> = (0..n as u32).collect();
-    let built = builder.build_par(&mut idx, 0, 0);
-    drop(builder);
+    let built = builder.build_par(&mut refs, 0, 0);
+    let idx = refs.par_iter().map(|r| r.id).collect();
+    drop(refs);
     let mut bin = Vec::new();
     flatten(built, &mut bin);
     (bin, idx)
@@ -410,9 +441,38 @@ impl<const N: usize> Bvh<N> {
         bounds: Vec<([f64; N], [f64; N])>,
         par_min: usize,
     ) -> Self {
-        let n = prims.len();
         assert!(
-            ids.len() == n && bounds.len() == n,
+            prims.len() == ids.len(),
+            "Bvh::build: prims, ids, bounds lengths differ"
+        );
+        Self::build_from(ids, bounds, |i, _| prims[i], par_min)
+    }
+
+    /// [`Bvh::build`] without a list of prepared simplices: `prepare(id)` gives the one with
+    /// id `id` (a simplex that [`PreparedSimplex::new`] accepts), called once per simplex, in
+    /// parallel, when its block is filled. The same tree and blocks as `build` over the
+    /// prepared simplices of `ids`, at the memory of the finished tree.
+    ///
+    /// # Panics
+    /// If `ids` and `bounds` differ in length or hold 2³¹ or more simplices.
+    pub fn build_lazily(
+        ids: Vec<u32>,
+        bounds: Vec<([f64; N], [f64; N])>,
+        prepare: impl Fn(u32) -> PreparedSimplex<N> + Sync,
+    ) -> Self {
+        Self::build_from(ids, bounds, |_, id| prepare(id), PAR_MIN)
+    }
+
+    /// The build over `ids` and `bounds`; `prepare(i, ids[i])` gives input i's prepared simplex.
+    fn build_from(
+        ids: Vec<u32>,
+        bounds: Vec<([f64; N], [f64; N])>,
+        prepare: impl Fn(usize, u32) -> PreparedSimplex<N> + Sync,
+        par_min: usize,
+    ) -> Self {
+        let n = ids.len();
+        assert!(
+            bounds.len() == n,
             "Bvh::build: prims, ids, bounds lengths differ"
         );
         assert!(n < LEAF_TAG as usize, "Bvh::build: too many simplices");
@@ -426,7 +486,8 @@ impl<const N: usize> Bvh<N> {
             };
         }
         let (bin, idx) = binary_tree(bounds, par_min);
-        let (nodes, blocks) = wide_tree(&bin, &idx, &prims, &ids);
+        let (nodes, blocks) = wide_tree(&bin, &idx, |i| prepare(i, ids[i]), &ids);
+        drop(ids);
         let root = &bin[0];
         let reach = (0..N)
             .map(|i| f64::from(root.min[i].abs()).max(f64::from(root.max[i].abs())))

@@ -5,6 +5,7 @@ use super::simplex::PreparedSimplex;
 use super::tree::{
     half_area, BinaryNode, LeafBlock, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
 };
+use rayon::prelude::*;
 
 /// How each binary subtree is laid out in the wide tree: the optimal collapse of Ylitie,
 /// Karras and Laine ("Efficient incoherent ray traversal on GPUs through compressed wide BVHs",
@@ -102,13 +103,15 @@ impl CollapsePlan {
 struct Collapse<'a, const N: usize> {
     bin: &'a [BinaryNode<N>],
     plan: CollapsePlan,
-    /// The input simplices and ids, and the leaf order: `order[j]` is the input index of the
-    /// j-th simplex in leaf order.
-    prims: &'a [PreparedSimplex<N>],
+    /// The input ids, and the leaf order: `order[j]` is the input index of the j-th simplex in
+    /// leaf order.
     ids: &'a [u32],
     order: &'a [u32],
     nodes: Vec<WideNode<N>>,
+    /// The blocks, their simplices' ids set and their prepared simplices filled in afterwards
+    /// (in parallel) from `block_first`, the position of each block's first simplex in `order`.
     blocks: Vec<LeafBlock<N>>,
+    block_first: Vec<u32>,
 }
 
 impl<const N: usize> Collapse<'_, N> {
@@ -130,19 +133,10 @@ impl<const N: usize> Collapse<'_, N> {
             count: nd.count,
         };
         for l in 0..nd.count as usize {
-            let src = self.order[nd.first as usize + l] as usize;
-            let p = &self.prims[src];
-            for k in 0..N {
-                for i in 0..N {
-                    block.m[k][i][l] = p.m[k][i];
-                }
-            }
-            for i in 0..N {
-                block.x0[i][l] = p.x0[i];
-            }
-            block.ids[l] = self.ids[src];
+            block.ids[l] = self.ids[self.order[nd.first as usize + l] as usize];
         }
         self.blocks.push(block);
+        self.block_first.push(nd.first);
         LEAF_TAG | (self.blocks.len() - 1) as u32
     }
 
@@ -204,22 +198,24 @@ pub(super) fn id_ranges<const N: usize>(
 }
 
 /// The wide nodes and leaf blocks (both in depth-first order) over the binary tree `bin` with
-/// leaf order `order`, laid out by the [`CollapsePlan`]; `prims[i]` and `ids[i]` are the input simplices.
+/// leaf order `order`, laid out by the [`CollapsePlan`]; `prepare(i)` and `ids[i]` are the
+/// input simplices. The blocks' simplices are prepared in parallel once the layout is known,
+/// so that no list of prepared simplices is alive beside the blocks.
 pub(super) fn wide_tree<const N: usize>(
     bin: &[BinaryNode<N>],
     order: &[u32],
-    prims: &[PreparedSimplex<N>],
+    prepare: impl Fn(usize) -> PreparedSimplex<N> + Sync,
     ids: &[u32],
 ) -> (Vec<WideNode<N>>, Vec<LeafBlock<N>>) {
     let plan = CollapsePlan::new(bin);
     let mut c = Collapse {
         bin,
         plan,
-        prims,
         ids,
         order,
         nodes: Vec::new(),
         blocks: Vec::with_capacity(bin.iter().filter(|b| b.count > 0).count()),
+        block_first: Vec::new(),
     };
     if bin[0].count > 0 {
         // A single leaf: a root node with one child.
@@ -234,6 +230,21 @@ pub(super) fn wide_tree<const N: usize>(
         c.node(0);
     }
     let (mut nodes, mut blocks) = (c.nodes, c.blocks);
+    (blocks.par_iter_mut().zip(c.block_first))
+        .with_min_len(256)
+        .for_each(|(block, first)| {
+            for l in 0..block.count as usize {
+                let p = prepare(order[first as usize + l] as usize);
+                for k in 0..N {
+                    for i in 0..N {
+                        block.m[k][i][l] = p.m[k][i];
+                    }
+                }
+                for i in 0..N {
+                    block.x0[i][l] = p.x0[i];
+                }
+            }
+        });
     nodes.shrink_to_fit();
     blocks.shrink_to_fit();
     (nodes, blocks)

@@ -114,31 +114,55 @@ pub fn ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
         .map(|r| (ridge(&s[r / N], r % N).0, r as u64))
         .collect();
     slots.par_sort_unstable();
-    let mut pairs = vec![];
-    let mut boundary = vec![];
-    let mut run: Vec<([u32; N], bool, u32)> = vec![];
-    for chunk in slots.chunk_by(|a, b| a.0 == b.0) {
-        run.clear();
-        run.extend(chunk.iter().map(|&(_, r)| {
-            let (simplex, slot) = ((r / N as u64) as usize, (r % N as u64) as usize);
-            let (_, key, odd) = ridge(&s[simplex], slot);
-            (key, odd, simplex as u32)
-        }));
-        run.sort_unstable();
-        for same in run.chunk_by(|a, b| a.0 == b.0) {
-            match same {
-                [(_, _, a)] => boundary.push(*a),
-                [(_, odd_a, a), (_, odd_b, b)] => {
-                    pairs.push(((*a).min(*b), (*a).max(*b), odd_a != odd_b))
-                }
-                more => {
-                    return Err(OrientError::NonManifold {
-                        ridge: more[0].0[..N - 1].to_vec(),
-                        simplices: more.len(),
-                    })
+    // The runs of equal hashes, matched in parallel over pieces cut between runs; the pieces'
+    // results are joined in order (the first non-manifold ridge in hash order is reported).
+    let pieces = rayon::current_num_threads() * 8;
+    let mut cuts = vec![0];
+    for k in 1..pieces {
+        let mut c = (slots.len() * k / pieces).max(*cuts.last().unwrap_or(&0));
+        while c > 0 && c < slots.len() && slots[c].0 == slots[c - 1].0 {
+            c += 1;
+        }
+        cuts.push(c);
+    }
+    cuts.push(slots.len());
+    type Matched = (Vec<(u32, u32, bool)>, Vec<u32>);
+    let matched: Vec<Result<Matched, OrientError>> = cuts
+        .par_windows(2)
+        .map(|w| {
+            let (mut pairs, mut boundary) = (vec![], vec![]);
+            let mut run: Vec<([u32; N], bool, u32)> = vec![];
+            for chunk in slots[w[0]..w[1]].chunk_by(|a, b| a.0 == b.0) {
+                run.clear();
+                run.extend(chunk.iter().map(|&(_, r)| {
+                    let (simplex, slot) = ((r / N as u64) as usize, (r % N as u64) as usize);
+                    let (_, key, odd) = ridge(&s[simplex], slot);
+                    (key, odd, simplex as u32)
+                }));
+                run.sort_unstable();
+                for same in run.chunk_by(|a, b| a.0 == b.0) {
+                    match same {
+                        [(_, _, a)] => boundary.push(*a),
+                        [(_, odd_a, a), (_, odd_b, b)] => {
+                            pairs.push(((*a).min(*b), (*a).max(*b), odd_a != odd_b))
+                        }
+                        more => {
+                            return Err(OrientError::NonManifold {
+                                ridge: more[0].0[..N - 1].to_vec(),
+                                simplices: more.len(),
+                            })
+                        }
+                    }
                 }
             }
-        }
+            Ok((pairs, boundary))
+        })
+        .collect();
+    let (mut pairs, mut boundary) = (vec![], vec![]);
+    for m in matched {
+        let (p, b) = m?;
+        pairs.extend(p);
+        boundary.extend(b);
     }
     pairs.par_sort_unstable();
     boundary.par_sort_unstable();

@@ -17,6 +17,7 @@ use crate::linalg::{
 use crate::mesh::Mesh;
 use crate::shapes;
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::path::Path;
 
 /// Largest number of rays per retina cell accepted.
@@ -164,14 +165,6 @@ impl<const N: usize> Scene<N> {
             .collect()
     }
 }
-
-/// Global id, prepared simplex (None when degenerate), unit normal and bounds of a simplex.
-type PrimRecord<const N: usize> = (
-    u32,
-    Option<PreparedSimplex<N>>,
-    Vector<N>,
-    ([f64; N], [f64; N]),
-);
 
 fn camera<const N: usize>(c: &CameraDesc, samples: u32) -> R<Camera<N>> {
     let position = vec_n::<N>(&c.position, "camera.position")?;
@@ -418,28 +411,14 @@ fn object_mesh<const N: usize>(
         }
         ShapeKind::Mesh => match (&o.vertices, &o.simplices, &o.file) {
             (Some(v), Some(s), None) => {
-                for (i, row) in v.iter().enumerate() {
-                    if row.len() != N {
-                        return Err(PathError::new(
-                            format!("{path}.vertices[{i}]"),
-                            format!("expected {N} numbers (dim = {N}), got {}", row.len()),
-                        ));
-                    }
-                }
-                for (i, row) in s.iter().enumerate() {
-                    if row.len() != N {
-                        return Err(PathError::new(
-                            format!("{path}.simplices[{i}]"),
-                            format!(
-                                "an (N−1)-simplex has {N} vertex indices (dim = {N}), got {}",
-                                row.len()
-                            ),
-                        ));
-                    }
-                }
-                let flat_v: Vec<f64> = v.iter().flatten().copied().collect();
-                let flat_s: Vec<f64> = s.iter().flatten().map(|&x| x as f64).collect();
-                mesh_from_rows::<N>(
+                let flat_v = vertex_rows::<N>(v, path)?;
+                let flat_s = s.flat(N).map_err(|(i, n)| {
+                    PathError::new(
+                        format!("{path}.simplices[{i}]"),
+                        format!("an (N−1)-simplex has {N} vertex indices (dim = {N}), got {n}"),
+                    )
+                })?;
+                mesh_from_rows::<N, i64>(
                     &flat_v,
                     v.len(),
                     &flat_s,
@@ -469,6 +448,17 @@ fn object_mesh<const N: usize>(
                 return Err(PathError::new(path, "mesh has vertices but no simplices"))
             }
         },
+    })
+}
+
+/// `vertices` as flat rows of N coordinates (borrowed from an array); an error names the
+/// first row of another length.
+fn vertex_rows<'a, const N: usize>(v: &'a Rows<f64>, path: &str) -> R<Cow<'a, [f64]>> {
+    v.flat(N).map_err(|(i, n)| {
+        PathError::new(
+            format!("{path}.vertices[{i}]"),
+            format!("expected {N} numbers (dim = {N}), got {n}"),
+        )
     })
 }
 
@@ -509,30 +499,22 @@ fn surface_mesh<const N: usize>(o: &ObjectDesc, path: &str) -> R<(Mesh<N>, Vec<[
             ),
         ));
     }
-    for (i, row) in v.iter().enumerate() {
-        if row.len() != N {
-            return Err(PathError::new(
-                format!("{path}.vertices[{i}]"),
-                format!("expected {N} numbers (dim = {N}), got {}", row.len()),
-            ));
-        }
-    }
-    let flat_v: Vec<f64> = v.iter().flatten().copied().collect();
+    let flat_v = vertex_rows::<N>(v, path)?;
     let vpath = format!("{path}.vertices");
-    let mesh = mesh_from_rows::<N>(&flat_v, v.len(), &[], 0, path, &vpath, &vpath)?;
+    let mesh = mesh_from_rows::<N, i64>(&flat_v, v.len(), &[], 0, path, &vpath, &vpath)?;
     crate::memory::check(
         t.len() as f64 * 12.0,
         &format!("a surface of {} triangles", t.len()),
     )
     .map_err(|e| PathError::new(path, e))?;
+    let flat_t = t.flat(3).map_err(|(i, n)| {
+        PathError::new(
+            format!("{path}.triangles[{i}]"),
+            format!("a triangle has 3 vertex indices, got {n}"),
+        )
+    })?;
     let mut triangles = Vec::with_capacity(t.len());
-    for (i, row) in t.iter().enumerate() {
-        if row.len() != 3 {
-            return Err(PathError::new(
-                format!("{path}.triangles[{i}]"),
-                format!("a triangle has 3 vertex indices, got {}", row.len()),
-            ));
-        }
+    for (i, row) in flat_t.chunks_exact(3).enumerate() {
         let mut idx = [0u32; 3];
         for (k, &x) in row.iter().enumerate() {
             if !(x >= 0 && (x as u64) < v.len() as u64) {
@@ -812,6 +794,7 @@ pub(crate) fn build_using<const N: usize>(
             }
         };
         if let Some(v) = &o.values {
+            let v = v.values();
             if v.len() != mesh.vertices.len() {
                 return Err(PathError::new(
                     format!("{path}.values"),
@@ -828,7 +811,7 @@ pub(crate) fn build_using<const N: usize>(
                     format!("must be finite, got {}", v[k]),
                 ));
             }
-            values = Some(v.clone());
+            values = Some(v.to_vec());
         }
         if let Some(spec) = &mat.texture {
             if o.shape == ShapeKind::Surface {
@@ -952,6 +935,12 @@ pub(crate) fn build_using<const N: usize>(
         &format!("the BVH of {total} simplices"),
     )
     .map_err(|e| PathError::new("objects", e))?;
+    // The orientation check matches ridges, which takes memory in proportion to the mesh:
+    // done before the BVH is alive.
+    let mut warnings: Vec<String> = (objects.iter().zip(&desc.objects).enumerate())
+        .filter(|(_, (_, d))| d.shape == ShapeKind::Mesh)
+        .filter_map(|(i, (o, _))| orientation_warning(&o.mesh, &format!("objects[{i}]")))
+        .collect();
     let shadows = r.shadows && !lights.is_empty();
     let bvh = if morton {
         let domain = objects
@@ -1005,10 +994,6 @@ pub(crate) fn build_using<const N: usize>(
     } else {
         norm(&std::array::from_fn::<f64, N, _>(|k| hi[k] - lo[k])).max(1e-300)
     };
-    let mut warnings: Vec<String> = (objects.iter().zip(&desc.objects).enumerate())
-        .filter(|(_, (_, d))| d.shape == ShapeKind::Mesh)
-        .filter_map(|(i, (o, _))| orientation_warning(&o.mesh, &format!("objects[{i}]")))
-        .collect();
     warnings.extend(surface_warnings);
     if skipped > 0 {
         warnings.push(format!(
@@ -1067,44 +1052,52 @@ fn sah_bvh<const N: usize>(
     offsets: &[u32],
     shadows: bool,
 ) -> Bvh<N> {
-    let per_object: Vec<Vec<PrimRecord<N>>> = objects
-        .iter()
-        .zip(offsets)
-        .map(|(o, &off)| {
-            (0..o.mesh.simplices.len())
+    // Which simplices are not degenerate, with their bounds (and, for the convexity
+    // certificates, their normals); the prepared simplices themselves are made again where
+    // the BVH's blocks are filled, so that no list of them is alive beside the blocks.
+    let mut ids = Vec::new();
+    let mut bounds = Vec::new();
+    for ((o, &off), d) in objects.iter_mut().zip(offsets).zip(descs) {
+        // Convexity certificates, which only shadow rays use. An elevation map is not
+        // certified: it is a graph over a box, an open surface, and the test would cost more
+        // than it saves.
+        let certify = shadows && d.shape != ShapeKind::Elevation;
+        let count = o.mesh.simplices.len();
+        let kept: Vec<(u32, Bounds<N>)>;
+        if certify {
+            let records: Vec<(Vector<N>, Option<Bounds<N>>)> = (0..count)
                 .into_par_iter()
                 .map(|s| {
                     let pts = o.mesh.simplex_points(s);
-                    let prep = PreparedSimplex::new(&pts);
-                    let n = prep.as_ref().map_or([0.0; N], |p| p.normal());
-                    (off + s as u32, prep, n, simplex_bounds(&pts))
+                    match PreparedSimplex::new(&pts) {
+                        Some(p) => (p.normal(), Some(simplex_bounds(&pts))),
+                        None => ([0.0; N], None),
+                    }
                 })
-                .collect()
-        })
-        .collect();
-    // Convexity certificates, which only shadow rays use. An elevation map is not certified:
-    // it is a graph over a box, an open surface, and the test would cost more than it saves.
-    if shadows {
-        for ((o, list), d) in objects.iter_mut().zip(&per_object).zip(descs) {
-            if d.shape == ShapeKind::Elevation {
-                continue;
-            }
-            let normals: Vec<Vector<N>> = list.par_iter().map(|rec| rec.2).collect();
+                .collect();
+            let normals: Vec<Vector<N>> = records.par_iter().map(|r| r.0).collect();
             o.convex = crate::convex::convex_side(&o.mesh, &normals, known_convex(d.shape));
+            kept = (records.into_par_iter().enumerate())
+                .filter_map(|(s, (_, b))| Some((off + s as u32, b?)))
+                .collect();
+        } else {
+            kept = (0..count)
+                .into_par_iter()
+                .filter_map(|s| {
+                    let pts = o.mesh.simplex_points(s);
+                    PreparedSimplex::new(&pts).map(|_| (off + s as u32, simplex_bounds(&pts)))
+                })
+                .collect();
+        }
+        ids.reserve(kept.len());
+        bounds.reserve(kept.len());
+        for (id, b) in kept {
+            ids.push(id);
+            bounds.push(b);
         }
     }
-    let total = per_object.iter().map(Vec::len).sum();
-    let mut prims = Vec::with_capacity(total);
-    let mut ids = Vec::with_capacity(total);
-    let mut bounds = Vec::with_capacity(total);
-    for list in per_object {
-        for (id, prep, _, bb) in list {
-            if let Some(p) = prep {
-                prims.push(p);
-                ids.push(id);
-                bounds.push(bb);
-            }
-        }
-    }
-    Bvh::build(prims, ids, bounds)
+    Bvh::build_lazily(ids, bounds, |g| {
+        PreparedSimplex::new(&simplex_at(objects, offsets, g as usize))
+            .expect("a simplex prepared once prepares again")
+    })
 }

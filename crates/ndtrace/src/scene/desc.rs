@@ -27,6 +27,8 @@
 
 use serde::{Deserialize, Serialize};
 
+pub use super::table::{Column, Rows, Table};
+
 /// The camera's projection, a scene key (`camera.projection`) defined beside the camera.
 pub use crate::camera::Projection;
 
@@ -283,15 +285,15 @@ impl ShapeKind {
 pub struct ObjectDesc {
     /// What to build.
     pub shape: ShapeKind,
-    /// Mesh: vertex positions (V, N).
+    /// Mesh and surface: vertex positions (V, N).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub vertices: Option<Vec<Vec<f64>>>,
+    pub vertices: Option<Rows<f64>>,
     /// Mesh: vertex indices (S, N) of each (N−1)-simplex.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub simplices: Option<Vec<Vec<i64>>>,
+    pub simplices: Option<Rows<i64>>,
     /// Surface: vertex indices (T, 3) of each triangle.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub triangles: Option<Vec<Vec<i64>>>,
+    pub triangles: Option<Rows<i64>>,
     /// Surface: the width of its sheet in the retina, in retina cells (default
     /// [`crate::surface::DEFAULT_WIDTH`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -322,7 +324,7 @@ pub struct ObjectDesc {
     /// One scalar per vertex, interpolated at the hit, for `material.colormap` and
     /// `material.isolines` (an elevation map's default: its field).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub values: Option<Vec<f64>>,
+    pub values: Option<Column<f64>>,
     /// Surface appearance.
     #[serde(default)]
     pub material: MaterialDesc,

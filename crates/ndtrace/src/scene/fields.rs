@@ -77,13 +77,31 @@ pub(crate) fn matrix_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<Ma
     Ok(m)
 }
 
+/// A vertex index as given: an integer (descriptions) or a float (`.npz` files).
+pub(crate) trait VertexIndex: Copy + std::fmt::Display {
+    /// The index, when it is a whole number below `count`.
+    fn below(self, count: usize) -> Option<u32>;
+}
+
+impl VertexIndex for f64 {
+    fn below(self, count: usize) -> Option<u32> {
+        (self >= 0.0 && self < count as f64 && self.fract() == 0.0).then_some(self as u32)
+    }
+}
+
+impl VertexIndex for i64 {
+    fn below(self, count: usize) -> Option<u32> {
+        (self >= 0 && (self as u64) < count as u64).then_some(self as u32)
+    }
+}
+
 /// A mesh from flat row-major arrays: `nv` vertices of N finite coordinates and `ns` simplices
-/// of N vertex indices (whole numbers below `nv`, given as floats); errors name the element
+/// of N vertex indices (whole numbers below `nv`); errors name the element
 /// (`vpath[i][k]`, `spath[s][k]`). `path` is the object's field path.
-pub(crate) fn mesh_from_rows<const N: usize>(
+pub(crate) fn mesh_from_rows<const N: usize, I: VertexIndex>(
     vertices: &[f64],
     nv: usize,
-    simplices: &[f64],
+    simplices: &[I],
     ns: usize,
     path: &str,
     vpath: &str,
@@ -112,13 +130,12 @@ pub(crate) fn mesh_from_rows<const N: usize>(
     for (s, row) in simplices.chunks_exact(N).enumerate() {
         let mut idx = [0u32; N];
         for (k, &x) in row.iter().enumerate() {
-            if !(x >= 0.0 && x < nv as f64 && x.fract() == 0.0) {
-                return Err(PathError::new(
+            idx[k] = x.below(nv).ok_or_else(|| {
+                PathError::new(
                     format!("{spath}[{s}][{k}]"),
                     format!("vertex index {x} out of range: the mesh has {nv} vertices"),
-                ));
-            }
-            idx[k] = x as u32;
+                )
+            })?;
         }
         mesh.simplices.push(idx);
     }

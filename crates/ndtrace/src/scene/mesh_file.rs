@@ -77,7 +77,7 @@ pub(crate) fn read_mesh<const N: usize>(
             "array \"simplices\" must hold integer vertex indices, not floats or bools (e.g. simplices.astype(numpy.int64))".into(),
         ));
     }
-    mesh_from_rows::<N>(
+    mesh_from_rows::<N, f64>(
         &v.data,
         v.shape.0,
         &s.data,

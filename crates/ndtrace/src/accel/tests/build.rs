@@ -23,6 +23,30 @@ fn accel_build_is_deterministic() {
 }
 
 #[test]
+fn accel_a_lazily_prepared_build_is_the_build_over_prepared_simplices() {
+    fn check<const N: usize>() {
+        let mut r = rng(4100 + N as u64);
+        // Ids that are not input positions, as a scene's global ids after skipped simplices.
+        let s: Vec<([[f64; N]; N], u32)> = (soup::<N>(&mut r, 3000).into_iter().enumerate())
+            .map(|(k, (p, _))| (p, 3 + 5 * k as u32))
+            .collect();
+        let want = build_soup(&s, PAR_MIN);
+        let kept: Vec<&([[f64; N]; N], u32)> = s
+            .iter()
+            .filter(|(p, _)| PreparedSimplex::new(p).is_some())
+            .collect();
+        let ids: Vec<u32> = kept.iter().map(|(_, id)| *id).collect();
+        let bounds = kept.iter().map(|(p, _)| simplex_bounds(p)).collect();
+        let lazy = Bvh::build_lazily(ids, bounds, |id| {
+            PreparedSimplex::new(&s[(id as usize - 3) / 5].0).unwrap()
+        });
+        assert!(lazy == want, "N={N}: the lazy build differs");
+        assert!(want.len() == kept.len() && want.node_count() > 1);
+    }
+    for_each_dim!(check);
+}
+
+#[test]
 fn accel_from_mesh_matches_from_simplices() {
     let cells = cube_boundary::<4>(2);
     let mut mesh = Mesh::<4>::default();

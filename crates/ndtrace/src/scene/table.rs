@@ -1,0 +1,252 @@
+//! Mesh arrays in the description: rows of numbers (`vertices`, `simplices`, `triangles`) and
+//! one number per vertex (`values`), either inline lists (TOML, dicts) or one flat, shared
+//! buffer handed over by the bindings from a numpy array without a trip through lists.
+//!
+//! Both forms read and compare the same: an array equals the inline lists with the same
+//! numbers (what it becomes on a TOML round trip), and is written as those lists.
+
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::borrow::Cow;
+use std::sync::Arc;
+
+/// A number kept in a mesh array, compared bit for bit (so that NaN equals itself and a copy
+/// of a description equals the original).
+pub trait Number: Copy + PartialEq + std::fmt::Debug + Send + Sync + 'static {
+    /// The number's bits.
+    fn bits(self) -> u64;
+}
+
+impl Number for f64 {
+    fn bits(self) -> u64 {
+        self.to_bits()
+    }
+}
+
+impl Number for i64 {
+    fn bits(self) -> u64 {
+        self as u64
+    }
+}
+
+/// Rows of `width` numbers in one flat C-ordered buffer, shared between copies of the
+/// description.
+#[derive(Debug, Clone)]
+pub struct Table<T> {
+    width: usize,
+    values: Arc<[T]>,
+}
+
+impl<T: Number> Table<T> {
+    /// `values` as rows of `width`; `None` unless `width` divides their count (a table of no
+    /// rows may have any width, a table with rows a positive one).
+    pub fn new(width: usize, values: impl Into<Arc<[T]>>) -> Option<Table<T>> {
+        let values = values.into();
+        let fits = if width == 0 {
+            values.is_empty()
+        } else {
+            values.len() % width == 0
+        };
+        fits.then_some(Table { width, values })
+    }
+
+    /// Numbers per row.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Number of rows.
+    pub fn rows(&self) -> usize {
+        self.values.len().checked_div(self.width).unwrap_or(0)
+    }
+
+    /// All numbers, row after row.
+    pub fn values(&self) -> &[T] {
+        &self.values
+    }
+}
+
+/// Rows of numbers: inline lists, or a [`Table`] from the bindings (never read from TOML).
+#[derive(Debug, Clone)]
+pub enum Rows<T> {
+    /// Nested lists, as read (rows may differ in length until the scene is built).
+    Inline(Vec<Vec<T>>),
+    /// One flat buffer of equal rows.
+    Array(Table<T>),
+}
+
+impl<T: Number> Rows<T> {
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        match self {
+            Rows::Inline(r) => r.len(),
+            Rows::Array(t) => t.rows(),
+        }
+    }
+
+    /// Whether there are no rows.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The numbers row after row when every row has `width` of them (borrowed from an array);
+    /// otherwise the first row that does not, and its length.
+    pub fn flat(&self, width: usize) -> Result<Cow<'_, [T]>, (usize, usize)> {
+        match self {
+            Rows::Array(t) if t.width == width || t.values.is_empty() => {
+                Ok(Cow::Borrowed(t.values()))
+            }
+            Rows::Array(t) => Err((0, t.width)),
+            Rows::Inline(r) => match r.iter().position(|row| row.len() != width) {
+                Some(i) => Err((i, r[i].len())),
+                None => Ok(Cow::Owned(r.iter().flatten().copied().collect())),
+            },
+        }
+    }
+
+    /// Row `i`.
+    fn row(&self, i: usize) -> &[T] {
+        match self {
+            Rows::Inline(r) => &r[i],
+            Rows::Array(t) => &t.values[i * t.width..(i + 1) * t.width],
+        }
+    }
+}
+
+impl<T: Number> PartialEq for Rows<T> {
+    fn eq(&self, other: &Self) -> bool {
+        let same = |a: &[T], b: &[T]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.bits() == y.bits())
+        };
+        match (self, other) {
+            (Rows::Array(a), Rows::Array(b)) if Arc::ptr_eq(&a.values, &b.values) => {
+                a.width == b.width
+            }
+            _ => {
+                self.len() == other.len()
+                    && (0..self.len()).all(|i| same(self.row(i), other.row(i)))
+            }
+        }
+    }
+}
+
+/// Written as the nested lists inline rows are read from.
+impl<T: Number + Serialize> Serialize for Rows<T> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq((0..self.len()).map(|i| self.row(i)))
+    }
+}
+
+/// Read as nested lists (the errors are those of `Vec<Vec<T>>`, located by the loader).
+impl<'de, T: Number + Deserialize<'de>> Deserialize<'de> for Rows<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Vec::<Vec<T>>::deserialize(d).map(Rows::Inline)
+    }
+}
+
+/// One number per vertex: an inline list, or a shared buffer from the bindings.
+#[derive(Debug, Clone)]
+pub enum Column<T> {
+    /// A list, as read.
+    Inline(Vec<T>),
+    /// A flat buffer from a 1-D array.
+    Array(Arc<[T]>),
+}
+
+impl<T: Number> Column<T> {
+    /// The numbers.
+    pub fn values(&self) -> &[T] {
+        match self {
+            Column::Inline(v) => v,
+            Column::Array(a) => a,
+        }
+    }
+}
+
+impl<T: Number> PartialEq for Column<T> {
+    fn eq(&self, other: &Self) -> bool {
+        let (a, b) = (self.values(), other.values());
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.bits() == y.bits())
+    }
+}
+
+impl<T: Number + Serialize> Serialize for Column<T> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.values().serialize(s)
+    }
+}
+
+impl<'de, T: Number + Deserialize<'de>> Deserialize<'de> for Column<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Vec::<T>::deserialize(d).map(Column::Inline)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn array(width: usize, v: &[f64]) -> Rows<f64> {
+        Rows::Array(Table::new(width, v.to_vec()).unwrap())
+    }
+
+    #[test]
+    fn an_array_equals_the_inline_rows_with_the_same_numbers() {
+        let inline = Rows::Inline(vec![vec![1.0, 2.0], vec![3.0, f64::NAN]]);
+        let a = array(2, &[1.0, 2.0, 3.0, f64::NAN]);
+        assert_eq!(a, inline);
+        assert_eq!(inline, a);
+        assert_eq!(a, a.clone());
+        assert_ne!(a, array(2, &[1.0, 2.0, 3.0, 4.0]));
+        // Same numbers, other rows.
+        assert_ne!(a, array(4, &[1.0, 2.0, 3.0, f64::NAN]));
+        assert_ne!(a, Rows::Inline(vec![vec![1.0, 2.0, 3.0, f64::NAN]]));
+        assert_ne!(array(2, &[0.0, 1.0]), array(2, &[-0.0, 1.0]));
+        assert_eq!(array(3, &[]), Rows::Inline(vec![]));
+    }
+
+    #[test]
+    fn flat_borrows_an_array_and_locates_a_short_row() {
+        let a = array(2, &[1.0, 2.0, 3.0, 4.0]);
+        assert!(matches!(
+            a.flat(2),
+            Ok(Cow::Borrowed(&[1.0, 2.0, 3.0, 4.0]))
+        ));
+        assert_eq!(a.flat(3), Err((0, 2)));
+        let inline = Rows::Inline(vec![vec![1.0, 2.0], vec![3.0]]);
+        assert_eq!(inline.flat(2), Err((1, 1)));
+        assert_eq!(Rows::<f64>::Inline(vec![]).flat(4).unwrap().len(), 0);
+        assert_eq!((a.len(), inline.len()), (2, 2));
+    }
+
+    #[test]
+    fn tables_refuse_numbers_that_do_not_fill_their_rows() {
+        assert!(Table::new(3, vec![1.0; 7]).is_none());
+        assert!(Table::new(0, vec![1.0]).is_none());
+        assert_eq!(Table::<f64>::new(0, vec![]).unwrap().rows(), 0);
+        assert_eq!(Table::new(3, vec![1i64; 6]).unwrap().rows(), 2);
+    }
+
+    #[test]
+    fn arrays_are_written_as_the_lists_they_equal() {
+        #[derive(Serialize, Deserialize)]
+        struct Doc {
+            rows: Rows<f64>,
+            column: Column<i64>,
+        }
+        let a = array(2, &[1.0, 2.5, 3.0, 4.0]);
+        let c = Column::Array(vec![1i64, -2].into());
+        let doc = Doc {
+            rows: a.clone(),
+            column: c.clone(),
+        };
+        let text = toml::to_string(&doc).unwrap();
+        assert_eq!(text, "rows = [[1.0, 2.5], [3.0, 4.0]]\ncolumn = [1, -2]\n");
+        let back: Doc = toml::from_str(&text).unwrap();
+        assert!(matches!(back.rows, Rows::Inline(_)));
+        assert!(matches!(back.column, Column::Inline(_)));
+        assert_eq!(back.rows, a);
+        assert_eq!(back.column, c);
+        assert_eq!(c, Column::Inline(vec![1, -2]));
+        assert_ne!(c, Column::Inline(vec![1]));
+    }
+}

@@ -1,0 +1,158 @@
+"""Mesh arrays from numpy travel as arrays (issue 23): a mesh's or surface's ``vertices``,
+``simplices``, ``triangles`` and per-vertex ``values`` go to the core as one buffer each (no
+nested lists), come back from ``to_dict`` as arrays, and give the same scene and bit-identical
+traces as the nested lists they equal."""
+
+from __future__ import annotations
+
+import pickle
+import re
+
+import numpy as np
+import pytest
+
+import ndtrace
+from ndtrace import _ndtrace
+
+CAMERA = dict(position=[0.6, 0.8, 1.0, 3.0], look_at=[0, 0, 0, 0], up=[[0, 1, 0, 0], [0, 0, 1, 0]],
+              fov=50, resolution=10)
+
+
+def _mesh():
+    v, s = ndtrace.mesh.elevation_map(np.random.default_rng(7).random((5, 4, 3)), height=0.4)
+    values = v[:, 3] * 2 - 0.1
+    return v, s, values
+
+
+def _scene(v, s, values, **material):
+    return (ndtrace.Scene(4).set_camera(**CAMERA)
+            .add_light("directional", direction=[0.3, 0.5, 0.2, 1.0])
+            .add_object("mesh", vertices=v, simplices=s, values=values,
+                        material={"colormap": "viridis", **material}))
+
+
+def _same_trace(a, b):
+    ra, rb = ndtrace.trace(a), ndtrace.trace(b)
+    assert np.isfinite(ra.depth).any()
+    for name in ("rgba", "depth", "normal", "object_id", "primitive_id"):
+        assert np.array_equal(getattr(ra, name), getattr(rb, name), equal_nan=True), name
+
+
+def test_mesh_arrays_travel_as_arrays_and_equal_their_lists():
+    v, s, values = _mesh()
+    scene = _scene(v, s, values)
+    d = scene.to_dict()["objects"][0]
+    for key, want in (("vertices", v), ("simplices", s), ("values", values)):
+        assert isinstance(d[key], np.ndarray), key
+        assert np.array_equal(d[key], want), key
+    assert d["simplices"].dtype == np.int64 and d["vertices"].dtype == np.float64
+    lists = _scene(v.tolist(), s.tolist(), values.tolist())
+    assert isinstance(lists.to_dict()["objects"][0]["vertices"], list)
+    again = ndtrace.load_dict(scene.to_dict())
+    from_toml = ndtrace.load_toml(scene.to_toml())
+    assert scene == lists == again == from_toml and lists == scene
+    # to_dict(lists=True) is plain data, the same whichever form the scene was given in.
+    assert scene.to_dict(lists=True) == lists.to_dict(lists=True) == lists.to_dict()
+    for other in (lists, again, from_toml, scene.copy(), pickle.loads(pickle.dumps(scene))):
+        _same_trace(scene, other)
+    moved = v.copy()
+    moved[5, 1] += 1e-9
+    assert _scene(moved, s, values) != scene and lists != _scene(moved, s, values)
+
+
+@pytest.mark.parametrize("convert", [
+    lambda v, s, x: (v.astype(np.float32).astype(np.float64), s.astype(np.int32), x),
+    lambda v, s, x: (np.asfortranarray(v), np.asfortranarray(s), x),
+    lambda v, s, x: (np.hstack([v, v])[:, :4], s[::-1][::-1], np.repeat(x, 2)[::2]),
+    lambda v, s, x: (v.astype(np.float32), s.astype(np.uint16), x.astype(np.float32)),
+], ids=["int32 indices", "Fortran order", "strided views", "float32 and uint16"])
+def test_any_numeric_dtype_and_layout_reads_as_its_values(convert):
+    v, s, values = _mesh()
+    cv, cs, cx = convert(v, s, values)
+    want = _scene(np.asarray(cv, np.float64).tolist(), np.asarray(cs).tolist(),
+                  np.asarray(cx, np.float64).tolist())
+    got = _scene(cv, cs, cx)
+    assert got == want
+    _same_trace(got, want)
+
+
+def test_the_scene_keeps_a_snapshot_and_leaves_the_callers_dict_alone():
+    v, s, values = _mesh()
+    scene = _scene(v, s, values)
+    want = ndtrace.trace(scene).depth
+    v += 0.5
+    s[:] = s[::-1]
+    scene.set_render(samples=1)  # a rebuild reads the snapshot
+    assert np.array_equal(ndtrace.trace(scene).depth, want, equal_nan=True)
+    d = scene.to_dict()
+    obj = d["objects"][0]
+    keep = {k: obj[k] for k in ("vertices", "simplices", "values")}
+    ndtrace.load_dict(d)
+    assert all(obj[k] is keep[k] for k in keep)
+    # The description's own arrays are read-only (copies share them).
+    data_obj = scene._data["objects"][0]
+    assert not data_obj["vertices"].flags.writeable and not data_obj["simplices"].flags.writeable
+    assert scene.copy()._data["objects"][0]["vertices"] is data_obj["vertices"]
+
+
+def test_a_surface_takes_its_arrays_too():
+    t = np.linspace(0, 2 * np.pi, 9)[:-1]
+    u, w = np.meshgrid(t, t, indexing="ij")
+    verts = np.stack([np.cos(u), np.sin(u), np.cos(w), np.sin(w)], -1).reshape(-1, 4) * 0.7
+    n = len(t)
+    idx = np.arange(n * n).reshape(n, n)
+    a, b = idx, np.roll(idx, -1, 0)
+    c, d = np.roll(idx, -1, 1), np.roll(np.roll(idx, -1, 0), -1, 1)
+    tris = np.concatenate([np.stack([a, b, d], -1).reshape(-1, 3), np.stack([a, d, c], -1).reshape(-1, 3)])
+
+    def surface(v, t):
+        return ndtrace.Scene(4).set_camera(**CAMERA).add_object("surface", vertices=v, triangles=t)
+    arrays, lists = surface(verts, tris), surface(verts.tolist(), tris.tolist())
+    assert isinstance(arrays.to_dict()["objects"][0]["triangles"], np.ndarray)
+    assert arrays == lists
+    _same_trace(arrays, lists)
+
+
+def _located(scene_or_dict):
+    with pytest.raises(ValueError) as e:
+        if isinstance(scene_or_dict, dict):
+            ndtrace.load_dict(scene_or_dict, name="<d>")
+        else:
+            scene_or_dict.compiled()
+    return str(e.value)
+
+
+def test_bad_arrays_are_located_errors():
+    v, s, values = _mesh()
+    bad = s.copy()
+    bad[3, 2] = len(v)
+    assert re.search(rf"objects\[0\]\.simplices\[3\]\[2\]: vertex index {len(v)} out of range",
+                     _located(_scene(v, bad, values)))
+    nan = v.copy()
+    nan[2, 1] = np.nan
+    assert re.search(r"objects\[0\]\.vertices\[2\]\[1\]: non-finite", _located(_scene(nan, s, values)))
+    assert re.search(r"objects\[0\]\.vertices\[0\]: expected 4 numbers \(dim = 4\), got 3",
+                     _located(_scene(v[:, :3], s, values)))
+    assert re.search(r"objects\[0\]\.simplices\[0\]: an \(N−1\)-simplex has 4 vertex indices",
+                     _located(_scene(v, s[:, :3], values)))
+    assert re.search(r"objects\[0\]\.values: one value per vertex", _located(_scene(v, s, values[:-1])))
+    # A float array of indices is not taken as indices (as with lists of floats).
+    assert "objects[0].simplices" in _located(_scene(v, s.astype(float) + 0.5, values))
+
+
+def _raw(**obj):
+    return {"dim": 4, "camera": {k: v for k, v in CAMERA.items()},
+            "objects": [{"shape": "mesh", **obj}]}
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("vertices", np.zeros((4, 4), np.float32), r"expected a float64 array, got dtype float32"),
+    ("simplices", np.zeros((1, 4), np.int32), r"expected an int64 array, got dtype int32"),
+    ("vertices", np.zeros(4), r"expected a 2-D array indexed \(vertex, coordinate\), got shape \[4\]"),
+    ("values", np.zeros((4, 1)), r"expected a 1-D array indexed \(vertex,\), got shape \[4, 1\]"),
+])
+def test_the_bindings_check_arrays_themselves(key, value, message):
+    # Below the Python wrapper (which converts dtypes), the bindings refuse what they cannot take.
+    obj = {"vertices": np.eye(4), "simplices": np.array([[0, 1, 2, 3]]), key: value}
+    with pytest.raises(ValueError, match=r"^<raw>: objects\[0\]\." + key + ": " + message):
+        _ndtrace.load_dict(_raw(**obj), "<raw>", None, None)
