@@ -156,3 +156,57 @@ def test_the_bindings_check_arrays_themselves(key, value, message):
     obj = {"vertices": np.eye(4), "simplices": np.array([[0, 1, 2, 3]]), key: value}
     with pytest.raises(ValueError, match=r"^<raw>: objects\[0\]\." + key + ": " + message):
         _ndtrace.load_dict(_raw(**obj), "<raw>", None, None)
+
+
+def test_masked_entries_and_empty_rows_are_refused_as_their_lists_are():
+    v, s, values = _mesh()
+    mv = np.ma.masked_array(v, mask=np.zeros_like(v, bool))
+    mv.mask[2, 1] = True
+    assert re.search(r"objects\[0\]\.vertices\[2\]\[1\]: non-finite", _located(_scene(mv, s, values)))
+    mx = np.ma.masked_array(values, mask=np.arange(len(values)) == 4)
+    assert re.search(r"objects\[0\]\.values\[4\]: must be finite", _located(_scene(v, s, mx)))
+    ms = np.ma.masked_array(s, mask=np.zeros_like(s, bool))
+    ms.mask[1, 0] = True
+    assert "objects[0].simplices" in _located(_scene(v, ms, values))
+    # A mask with nothing masked is the plain array.
+    assert _scene(np.ma.masked_array(v), s, values) == _scene(v, s, values)
+    # Rows of no numbers are refused (an empty mesh is not silently made of them).
+    assert re.search(r"objects\[0\]\.simplices\[0\]: an \(N−1\)-simplex has 4 vertex indices \(dim = 4\), got 0",
+                     _located(_scene(v, np.zeros((5, 0), np.int64), values)))
+    with pytest.raises(ValueError, match=r"^<raw>: objects\[0\]\.simplices: expected rows of numbers"):
+        _ndtrace.load_dict(_raw(vertices=np.eye(4), simplices=np.zeros((5, 0), np.int64)), "<raw>", None, None)
+
+
+def test_a_read_only_view_of_the_callers_memory_is_still_a_snapshot():
+    v, s, values = _mesh()
+    base = v.copy()
+    view = base.view()
+    view.setflags(write=False)
+    scene = _scene(view, s, values)
+    want = ndtrace.trace(scene).depth
+    base += 0.5  # the caller's memory changes under its read-only view
+    scene.set_render(samples=1)
+    assert np.array_equal(ndtrace.trace(scene).depth, want, equal_nan=True)
+    assert scene == _scene(v, s, values)
+
+
+def test_the_bindings_read_any_layout_in_index_order():
+    # Straight to the bindings (the wrapper makes C-ordered copies first): Fortran-ordered and
+    # strided arrays are read in index order, not as their memory lies.
+    v, s, values = _mesh()
+    cam = {"position": CAMERA["position"], "look_at": CAMERA["look_at"], "up": CAMERA["up"],
+           "fov": CAMERA["fov"], "resolution": CAMERA["resolution"]}
+
+    def depth(vv, ss):
+        d = {"dim": 4, "camera": cam, "objects": [{"shape": "mesh", "vertices": vv, "simplices": ss}]}
+        compiled = _ndtrace.load_dict(d, "<raw>", None, None)
+        return ndtrace.trace(ndtrace.Scene._from_compiled(compiled, None)).depth
+    want = depth(v, s)
+    assert np.isfinite(want).any()
+    wide_v = np.zeros((len(v), 8))
+    wide_v[:, ::2] = v
+    wide_s = np.zeros((len(s) * 2, 4), np.int64)
+    wide_s[::2] = s
+    for vv, ss in ((np.asfortranarray(v), np.asfortranarray(s)), (wide_v[:, ::2], wide_s[::2])):
+        assert not (vv.flags.c_contiguous or ss.flags.c_contiguous)
+        assert np.array_equal(depth(vv, ss), want, equal_nan=True)

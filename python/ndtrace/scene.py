@@ -45,17 +45,25 @@ def _snapshot(path: str, key: str, value: np.ndarray) -> np.ndarray | None:
     """The array at an object's ``key`` as the one C-ordered array the loader takes (a
     read-only snapshot: the scene must not change when the caller's array does, and copies of
     the scene can then share it), or None when it is not one (lists then, and the loader says
-    what is wrong)."""
+    what is wrong, as for the equal lists). Masked entries of a float array are NaN (refused,
+    located, by the loader); masked indices and rows of no numbers go as lists."""
     ndim, dtype = _ARRAY_KEYS[key]
     if key == "field":
         a = _field(path, value)
-    elif value.ndim != ndim or value.dtype.kind not in ("iu" if dtype == np.int64 else "biuf") \
-            or (value.dtype.kind == "u" and value.dtype.itemsize == 8 and value.size
-                and value.max() > np.iinfo(np.int64).max):
-        return None
     else:
-        a = np.ascontiguousarray(value, dtype=dtype)
-    if np.may_share_memory(a, value) and (a.flags.writeable or value.flags.writeable):
+        kinds = "iu" if dtype == np.int64 else "iuf"
+        if value.ndim != ndim or value.dtype.kind not in kinds \
+                or (ndim == 2 and value.shape[1] == 0 and value.shape[0] > 0) \
+                or (value.dtype.kind == "u" and value.dtype.itemsize == 8 and value.size
+                    and value.max() > np.iinfo(np.int64).max):
+            return None
+        if isinstance(value, np.ma.MaskedArray):
+            if dtype == np.int64:
+                return None
+            a = np.ascontiguousarray(value.astype(np.float64).filled(np.nan))
+        else:
+            a = np.ascontiguousarray(value, dtype=dtype)
+    if np.may_share_memory(a, value):
         a = a.copy()
     a.setflags(write=False)
     return a

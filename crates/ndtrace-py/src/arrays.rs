@@ -145,6 +145,12 @@ fn payload(value: &Bound<'_, PyAny>, key: &Key) -> Result<Payload, String> {
             key.ndim, key.axes
         ));
     }
+    if key.ndim == 2 && shape[1] == 0 && shape[0] > 0 {
+        return Err(format!(
+            "expected rows of numbers indexed {}, got shape {shape:?} (rows of none)",
+            key.axes
+        ));
+    }
     let wrong_dtype = || {
         let want = if key.float { "a float64" } else { "an int64" };
         format!("expected {want} array, got dtype {}", a.dtype())
