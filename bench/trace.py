@@ -4,10 +4,13 @@ Prints, for each fixed scene of ../shared/bench/ (see its README) and at 1 and 2
 rays/s = retina cells / wall time of ``ndtrace.trace(scene, threads=k)`` called from Python on
 an already loaded scene (best of 3; shading and shadow rays included), the BVH build time
 (loading the scene: validation, mesh, prepared simplices and BVH) and the peak resident memory
-of a process that loads and traces only that scene.
+of a process that loads and traces only that scene. Then the N-cubes cube5 … cube8 (their
+facets Kuhn-triangulated, (N−1)! simplices each) at 2²¹ retina cells (cube7 and cube8: one
+run each).
 
 Usage:  python bench/trace.py [--quick] [--only NAME ...]
-  --quick   64³ retinas and 256² images, and no million-simplex sphere
+  --quick   64³ retinas and 256² images, 2¹⁷ cells for the cubes, and no million-simplex
+            sphere nor cube8
 """
 
 from __future__ import annotations
@@ -96,6 +99,28 @@ def scene_sphere4(res: int) -> dict:
     return d
 
 
+#: Retina resolutions of the N-cube scenes: 2²¹ cells (2¹⁷ with --quick), as even as powers of
+#: two allow.
+CUBE_RES = {5: [64, 32, 32, 32], 6: [32, 16, 16, 16, 16], 7: [16, 16, 16, 8, 8, 8],
+            8: [8, 8, 8, 8, 8, 8, 8]}
+CUBE_RES_QUICK = {5: [32, 16, 16, 16], 6: [16, 16, 8, 8, 8], 7: [8, 8, 8, 8, 4, 4],
+                  8: [8, 4, 4, 4, 4, 4, 4]}
+
+
+def scene_cube(dim: int, quick: bool) -> dict:
+    """The N-cube (its facets Kuhn-triangulated: 2N·(N−1)! simplices), tilted, seen in
+    perspective with a light, at 2²¹ retina cells."""
+    up = [[1.0 if i == k else 0.0 for i in range(dim)] for k in range(1, dim - 1)]
+    return {
+        "dim": dim,
+        "camera": {"position": [0.9 + 0.35 * i for i in range(dim)], "look_at": [0.0] * dim,
+                   "up": up, "fov": 55, "resolution": (CUBE_RES_QUICK if quick else CUBE_RES)[dim]},
+        "lights": [{"type": "directional", "direction": [0.3 + 0.1 * i for i in range(dim)]}],
+        "objects": [{"shape": "hypercube", "transform": [{"rotate": {"plane": [0, dim - 1], "degrees": 20}}],
+                     "material": {"color": [0.3, 0.6, 0.9]}}],
+    }
+
+
 def run_one(name: str, quick: bool) -> dict:
     """Loads and traces one scene in this process; returns its figures."""
     import ndtrace
@@ -109,6 +134,7 @@ def run_one(name: str, quick: bool) -> dict:
             "ico6_81920": lambda: scene_ico(6, img, tmp),
             "ico8_1310720": lambda: scene_ico(8, img, tmp),
             "sphere4_1572864": lambda: scene_sphere4(vol),
+            **{f"cube{n}": (lambda n=n: scene_cube(n, quick)) for n in CUBE_RES},
         }[name]()
         t0 = time.perf_counter()
         scene = ndtrace.load_dict(desc)
@@ -117,8 +143,10 @@ def run_one(name: str, quick: bool) -> dict:
         prims, nodes, bvh_bytes = scene.compiled().bvh_stats()
         out = {"scene": name, "simplices": prims, "cells": cells, "build_s": build,
                "bvh_bytes_per_simplex": bvh_bytes / max(prims, 1)}
+        # One run each for the slow high-N cubes (seconds per trace), else the best of 3.
+        runs = 1 if name in ("cube7", "cube8") else 3
         for k in (1, 2):
-            best = min(_timed(ndtrace.trace, scene, k) for _ in range(3))
+            best = min(_timed(ndtrace.trace, scene, k) for _ in range(runs))
             out[f"rays_per_s_{k}t"] = cells / best
         out["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         return out
@@ -139,7 +167,9 @@ def main() -> None:
     if a.one:
         print(json.dumps(run_one(a.one, a.quick)))
         return
-    names = a.only or ["s3_3072", "elev_3072", "ico6_81920", "ico8_1310720"] + ([] if a.quick else ["sphere4_1572864"])
+    names = a.only or (["s3_3072", "elev_3072", "ico6_81920", "ico8_1310720"]
+                       + ([] if a.quick else ["sphere4_1572864"])
+                       + ["cube5", "cube6", "cube7"] + ([] if a.quick else ["cube8"]))
     print(f"{'scene':<16} {'simplices':>10} {'cells':>9} {'build s':>8} {'Mrays/s 1t':>10} "
           f"{'Mrays/s 2t':>10} {'2t/1t':>6} {'BVH B/simplex':>13} {'peak MiB':>9}")
     for name in names:

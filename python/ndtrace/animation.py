@@ -26,7 +26,8 @@ from .files import to_srgb8, write_png
 from .retina import trace
 from .scene import Scene, load_dict
 
-__all__ = ["animate", "frame_scene", "frame_paths", "gif_frame_ms", "GIF_MEMORY_LIMIT"]
+__all__ = ["animate", "frame_scene", "frame_paths", "gif_frame_ms", "render_frame",
+           "GIF_MEMORY_LIMIT"]
 
 VIDEOS = ("gif", "mp4", None)
 
@@ -52,10 +53,25 @@ def _table(scene: Scene, animation: dict | None, frames: int | None) -> Scene:
 
 
 def frame_scene(scene: Scene, k: int) -> Scene:
-    """Frame ``k`` (0-based) of the scene's animation, as a still :class:`Scene`."""
+    """Frame ``k`` (0-based) of the scene's animation, as a still :class:`Scene`. When the
+    animation moves only the camera, the frame shares the scene's built objects and BVH (no
+    rebuild); otherwise it is built from the frame's description."""
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < 2**32:
         raise ValueError(f"k: expected a frame index ≥ 0, got {k!r}")
-    return load_dict(scene.compiled().animation_frame(int(k)), base=scene._base)
+    compiled = scene.compiled()
+    # An animation of the camera reuses the scene's objects and BVH (the same bits as a build).
+    shared = compiled.camera_frame(int(k))
+    if shared is not None:
+        return Scene._from_compiled(shared, scene._base)
+    return load_dict(compiled.animation_frame(int(k)), base=scene._base)
+
+
+def render_frame(animated: Scene, k: int, threads: int | None, options: dict,
+                 progress: Callable[[int, int], object] | None = None) -> np.ndarray:
+    """Frame ``k`` of ``animated``'s animation traced and composited with ``options``: the
+    picture ``animate`` writes (here or on a Dask worker)."""
+    still = frame_scene(animated, k)
+    return _composite(trace(still, threads=threads, progress=progress), threads=threads, **options)
 
 
 def frame_paths(output: str | os.PathLike, frames: int) -> list[str]:
@@ -195,6 +211,7 @@ def animate(
     composite: dict | None = None,
     progress: Callable[[int, int], object] | None = None,
     keep_frames: bool = False,
+    client=None,
 ) -> list[str]:
     """Renders the scene's animation and returns the paths written.
 
@@ -208,6 +225,10 @@ def animate(
     :data:`GIF_MEMORY_LIMIT` bytes) at the end. ``progress(done, total)`` counts retina cells
     over all frames. Ctrl-C stops within a fraction of a second: finished frames stay, the
     video is not written.
+
+    ``client`` (a ``dask.distributed.Client``) renders the frames on its workers (each with
+    ``threads`` threads, default 1: one per worker thread) and writes them here, in order: the same files,
+    bit for bit (:mod:`ndtrace.cluster`); progress then counts finished frames.
     """
     output = os.fspath(output)
     kind = _video_kind(output, video)
@@ -231,17 +252,24 @@ def animate(
     paths = frame_paths(output, count)
     write_frames = bool(keep_frames) or output.lower().endswith(".png")
     movie = _Video(kind, os.path.splitext(output)[0] + "." + kind, float(table["fps"])) if kind else None
+
+    def write(k: int, picture: np.ndarray) -> None:
+        if write_frames:
+            write_png(paths[k], picture)
+        if movie is not None:
+            movie.add(to_srgb8(picture, opaque=True))
+
     try:
-        for k, path in enumerate(paths):
-            tick = None if progress is None else (lambda done, _total, k=k: progress(k * cells + done, count * cells))
-            still = frame_scene(animated, k)
-            picture = _composite(trace(still, threads=threads, progress=tick), threads=threads, **options)
-            if write_frames:
-                write_png(path, picture)
-            if movie is not None:
-                movie.add(to_srgb8(picture, opaque=True))
-            if progress is not None:
-                progress((k + 1) * cells, count * cells)
+        if client is not None:
+            from .cluster import render_frames
+
+            render_frames(animated, count, client, threads, options, cells, progress, write)
+        else:
+            for k in range(count):
+                tick = None if progress is None else (lambda done, _total, k=k: progress(k * cells + done, count * cells))
+                write(k, render_frame(animated, k, threads, options, tick))
+                if progress is not None:
+                    progress((k + 1) * cells, count * cells)
         if movie is not None:
             movie.finish()
     except BaseException:

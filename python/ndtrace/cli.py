@@ -133,10 +133,22 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--video", choices=("gif", "mp4", "none"), default="gif",
                    help="with --frames and -o .png: the video written beside the frames")
     _add_output_options(p)
+    p.add_argument("--dask", nargs="?", const="local", type=_dask_address, metavar="ADDRESS",
+                   help="trace (or render an animation's frames) on Dask: 'local' (the default: "
+                        "a LocalCluster on this machine) or a scheduler tcp://HOST:PORT "
+                        "(pip install 'ndtrace[dask]')")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.add_argument("--version", action="version", version=f"ndtrace {__version__}")
     return p
+
+
+def _dask_address(text: str) -> str:
+    if text != "local" and "://" not in text:
+        raise argparse.ArgumentTypeError(
+            f"expected 'local' or a scheduler address tcp://HOST:PORT, got {text!r} (give "
+            "--dask after the scene, or write --dask local)")
+    return text
 
 
 def _add_output_options(p: argparse.ArgumentParser) -> None:
@@ -411,7 +423,24 @@ def run(argv: list[str] | None = None) -> int:
         raise UsageError(f"composite.turntable: writes a .gif or .mp4 (or numbered .png frames), "
                          f"not {args.output}")
 
-    # 2. Trace, then composite, with a progress bar.
+    if animating and scene.to_dict().get("animation") is None:
+        raise UsageError(f"{args.scene}: the scene has no [animation] table to render frames of")
+    if args.dask:
+        try:
+            from .cluster import connect, distributed_module
+
+            distributed_module()
+        except ImportError as e:
+            raise UsageError(f"--dask: {e}") from None
+
+        with connect(args.dask) as client:
+            return _render(args, scene, animating, turntable, client)
+    return _render(args, scene, animating, turntable, None)
+
+
+def _render(args: argparse.Namespace, scene: Scene, animating: bool, turntable: int, client) -> int:
+    """Steps 2 and 3 of :func:`run`: trace (on ``client``'s Dask workers if given) and
+    composite with a progress bar, then write each file atomically."""
     from .composite import composite
 
     bar = Progress(args.quiet)
@@ -419,11 +448,10 @@ def run(argv: list[str] | None = None) -> int:
         from .animation import animate
 
         video = None if args.video == "none" else args.video
-        if scene.to_dict().get("animation") is None:
-            raise UsageError(f"{args.scene}: the scene has no [animation] table to render frames of")
         bar.begin("frames")
         paths = animate(scene, args.output, frames=args.frames, video=video,
-                        threads=args.threads, progress=bar.update, keep_frames=args.keep_frames)
+                        threads=args.threads, progress=bar.update, keep_frames=args.keep_frames,
+                        client=client)
         bar.end()
         if not args.quiet:
             pngs = [p for p in paths if p.endswith(".png")]
@@ -432,7 +460,7 @@ def run(argv: list[str] | None = None) -> int:
             print("wrote " + " and ".join(written), file=sys.stderr)
         return 0
     bar.begin("tracing")
-    retina = trace(scene, threads=args.threads, progress=bar.update)
+    retina = trace(scene, threads=args.threads, progress=bar.update, client=client)
     bar.end()
     if args.output.lower().endswith(".svg"):
         from .svg import write_svg

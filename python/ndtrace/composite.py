@@ -13,6 +13,7 @@ from typing import Sequence
 import numpy as np
 
 from . import _ndtrace
+from .files import c_array
 from .retina import Retina
 from .scene import _plain
 
@@ -32,7 +33,7 @@ def _array(name: str, value) -> np.ndarray:
         big = np.flatnonzero(np.isfinite(a) & (np.abs(a.astype(np.float64)) > np.finfo(np.float32).max))
         if big.size:
             raise ValueError(f"{name}: value {a.flat[big[0]]} at index {big[0]} overflows float32")
-    return np.ascontiguousarray(a, dtype=np.float32)
+    return c_array(a, np.float32)
 
 
 def composite(

@@ -25,13 +25,19 @@ IMAGE_FORMATS: dict[str, str] = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG",
 _EXTS = (".exr",)
 
 
+def c_array(a, dtype=None) -> np.ndarray:
+    """``a`` as a C-ordered, aligned array of ``dtype`` (a copy only if needed), as the core
+    reads arrays: pickled arrays (Dask, multiprocessing) can come back unaligned."""
+    return np.require(a, dtype=dtype, requirements=["C_CONTIGUOUS", "ALIGNED"])
+
+
 def _image(name: str, image) -> np.ndarray:
     a = np.asarray(image)
     if a.ndim != 3 or a.shape[2] != 4 or a.shape[0] == 0 or a.shape[1] == 0:
         raise ValueError(f"{name}: expected an image of shape (H, W, 4), got {a.shape}")
     if a.dtype.kind not in "biuf":
         raise ValueError(f"{name}: expected real numbers, got dtype {a.dtype}")
-    a = np.ascontiguousarray(a, dtype=np.float32)
+    a = c_array(a, np.float32)
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: the image holds NaN or infinite values")
     return a
@@ -54,7 +60,7 @@ def write_exr(path: str | os.PathLike, image_or_retina, *, depth=None) -> None:
                 _ndtrace.MIN_DIM <= r.dim <= _ndtrace.MAX_DIM):
             raise ValueError(f"retina.dim: expected an integer in {_ndtrace.MIN_DIM}..{_ndtrace.MAX_DIM}, "
                              f"got {r.dim!r}")
-        c = np.ascontiguousarray
+        c = c_array
         _ndtrace.write_retina_exr(
             path, r.dim, list(r.shape), c(r.rgba, np.float32), c(r.depth, np.float32),
             c(r.normal, np.float32), c(r.object_id, np.int32), c(r.primitive_id, np.int64),
@@ -63,7 +69,7 @@ def write_exr(path: str | os.PathLike, image_or_retina, *, depth=None) -> None:
         return
     img = _image("image", image_or_retina)
     if depth is not None:
-        depth = np.ascontiguousarray(depth, dtype=np.float32)
+        depth = c_array(depth, np.float32)
         if depth.shape != img.shape[:2]:
             raise ValueError(f"depth: expected shape {img.shape[:2]}, got {depth.shape}")
     _ndtrace.write_picture_exr(path, img, depth)
@@ -90,7 +96,7 @@ def _pixels(name: str, image, transparent: bool) -> np.ndarray:
         raise ValueError(f"{name}: expected an image of shape (H, W), (H, W, 3) or (H, W, 4), "
                          f"got {a.shape}")
     if a.dtype == np.uint8:
-        return np.ascontiguousarray(a)
+        return c_array(a)
     if a.ndim == 3 and a.shape[2] == 4:
         return to_srgb8(_image(name, a), opaque=not transparent)
     if a.dtype.kind not in "biuf":

@@ -91,6 +91,8 @@ def trace(
     scene: Scene,
     threads: int | None = None,
     progress: Callable[[int, int], object] | None = None,
+    *,
+    client=None,
 ) -> Retina:
     """Traces ``scene`` onto its retina with ``threads`` threads (None: every core).
 
@@ -102,11 +104,20 @@ def trace(
     and reused by the next trace, which overwrites every element: writing to fresh memory
     costs page faults, a fifth of a 4D trace at 128³. ``ndtrace.release_buffers()`` frees the
     kept buffers.
+
+    ``client`` (a ``dask.distributed.Client``) traces the retina in slabs on its workers
+    (each slab with ``threads`` threads, default 1: one per worker thread): the same retina, bit for bit
+    (:mod:`ndtrace.cluster`); progress then counts the cells of finished slabs.
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected an ndtrace.Scene, got {type(scene).__name__}")
     if threads is not None and (not isinstance(threads, int) or threads < 1):
         raise ValueError(f"threads: expected a positive integer or None, got {threads!r}")
     compiled = scene.compiled()
-    out = compiled.trace(threads, progress)
+    if client is not None:
+        from .cluster import trace_slabs
+
+        out = trace_slabs(scene, client, threads, progress)
+    else:
+        out = compiled.trace(threads, progress)
     return Retina(**out, camera=compiled.camera_toml(), _source=compiled)

@@ -21,6 +21,7 @@ import numpy as np
 
 from . import _ndtrace
 from .composite import _array, composite, scene_options
+from .files import c_array
 from .retina import Retina, trace
 from .scene import Scene, _plain
 
@@ -86,7 +87,7 @@ def svg_text(scene_or_retina, *, fill: bool = True, threads: int | None = None, 
 
         picture = composite(retina, threads=threads, **{**opts, "edges": False})
         buf = io.BytesIO()
-        Image.fromarray(_ndtrace.to_srgb8(np.ascontiguousarray(picture, dtype=np.float32), True)).save(buf, "PNG")
+        Image.fromarray(_ndtrace.to_srgb8(c_array(picture, np.float32), True)).save(buf, "PNG")
         data = base64.b64encode(buf.getvalue()).decode("ascii")
         out.append(f'<image width="{w}" height="{h}" preserveAspectRatio="none" '
                    f'href="data:image/png;base64,{data}" xlink:href="data:image/png;base64,{data}"/>')

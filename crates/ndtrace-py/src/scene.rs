@@ -158,26 +158,53 @@ impl CompiledScene {
         crate::arrays::to_dict(py, &frame)
     }
 
+    /// Frame `k` of an animation that moves only the camera, as a scene sharing this one's
+    /// objects and BVH (bit for bit the frame's description built anew); `None` when the
+    /// animation moves objects (build `animation_frame(k)` then).
+    fn camera_frame(&self, k: u32) -> PyResult<Option<CompiledScene>> {
+        let frame = guarded("camera_frame", || {
+            scene::camera_frame(&self.desc, &self.scene, k, "<scene>").transpose()
+        })?;
+        Ok(frame.map(|(desc, scene)| CompiledScene { desc, scene }))
+    }
+
     /// Whether two scenes have equal descriptions.
     fn same_description(&self, other: &CompiledScene) -> bool {
         self.desc == other.desc
     }
 
-    /// Traces the retina. `threads=None` uses every core. `callback(done, total)` is called
-    /// about ten times a second; Ctrl-C (or an exception in the callback) cancels within a
-    /// fraction of a second. Returns a dict of numpy arrays.
-    #[pyo3(signature = (threads=None, callback=None))]
+    /// The retina cut into at most `count` slabs of whole chunks, as even as chunks allow:
+    /// `(start, end)` cell ranges in memory order for `trace(cells=…)`.
+    fn slabs(&self, count: usize) -> Vec<(usize, usize)> {
+        with_scene!(&self.scene, s, _N => render::slabs(s, count))
+            .into_iter()
+            .map(|r| (r.start, r.end))
+            .collect()
+    }
+
+    /// Traces the retina, or with `cells=(start, end)` (one of [`Self::slabs`]) only those
+    /// cells, flat, with the bits the whole retina gives them. `threads=None` uses every core.
+    /// `callback(done, total)` is called about ten times a second; Ctrl-C (or an exception in
+    /// the callback) cancels within a fraction of a second. Returns a dict of numpy arrays.
+    #[pyo3(signature = (threads=None, callback=None, cells=None))]
     fn trace<'py>(
         &self,
         py: Python<'py>,
         threads: Option<usize>,
         callback: Option<Bound<'py, PyAny>>,
+        cells: Option<(usize, usize)>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let pool = crate::thread_pool(threads)?;
-        let total = with_scene!(&self.scene, s, _N => s.camera.cell_count());
+        let total = match cells {
+            Some((a, b)) => b.saturating_sub(a),
+            None => with_scene!(&self.scene, s, _N => s.camera.cell_count()),
+        };
         let progress = Progress::default();
         let scene = &self.scene;
-        let run = || with_scene!(scene, s, _N => render::trace(s, &progress));
+        let run = || match cells {
+            Some((a, b)) => with_scene!(scene, s, _N => render::trace_slab(s, &progress, a..b)),
+            None => with_scene!(scene, s, _N => render::trace(s, &progress)),
+        };
         let mut interrupt: Option<PyErr> = None;
         let result = std::thread::scope(|sc| {
             let (done_tx, done_rx) = std::sync::mpsc::channel::<()>();

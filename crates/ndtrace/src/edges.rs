@@ -40,6 +40,8 @@ use crate::scene::desc::Projection;
 use crate::scene::Scene;
 use crate::NdResult;
 use rayon::prelude::*;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
 /// Sample rays per retina cell of an edge's projected length.
 pub const SAMPLES_PER_CELL: f64 = 8.0;
@@ -61,6 +63,43 @@ pub struct EdgeSegment<const N: usize> {
     pub visible: bool,
 }
 
+/// The feature edges of a built scene's objects by crease angle, found once (they depend on the
+/// geometry, not on the camera) and shared by the scenes [`Scene::with_camera`] makes, so that
+/// the frames of a camera animation do not look for them again.
+#[derive(Debug, Default)]
+pub struct EdgeCache(Mutex<HashMap<EdgeKey, Arc<Vec<[u32; 2]>>>>);
+
+/// An [`EdgeCache`] entry's key: the object's index and the bits of the crease angle.
+type EdgeKey = (usize, u64);
+
+impl EdgeCache {
+    /// The feature edges of object `object` at `angle_degrees`: from the cache, or `find`'s.
+    fn feature_edges(
+        &self,
+        object: usize,
+        angle_degrees: f64,
+        find: impl FnOnce() -> NdResult<Vec<[u32; 2]>>,
+    ) -> NdResult<Arc<Vec<[u32; 2]>>> {
+        let key = (object, angle_degrees.to_bits());
+        if let Some(e) = self.0.lock().map_err(|_| poisoned())?.get(&key) {
+            return Ok(Arc::clone(e));
+        }
+        let edges = Arc::new(find()?);
+        self.0
+            .lock()
+            .map_err(|_| poisoned())?
+            .insert(key, Arc::clone(&edges));
+        Ok(edges)
+    }
+}
+
+fn poisoned() -> crate::NdError {
+    crate::NdError::Value {
+        arg: "scene".into(),
+        message: "the feature-edge cache was poisoned by an earlier panic".into(),
+    }
+}
+
 /// The feature edges (crease angle `angle_degrees`) of every object of `scene`, split into the
 /// pieces the camera sees and those it does not (see the module docs). Pieces come object by
 /// object, edge by edge in [`feature_edges`] order, along each edge from its first vertex; the
@@ -72,7 +111,12 @@ pub fn edge_segments<const N: usize>(
     let culled = culled(scene);
     let mut out = Vec::new();
     for (o, obj) in scene.objects.iter().enumerate() {
-        let edges = feature_edges(&obj.mesh.vertices, &obj.mesh.simplices, angle_degrees)?;
+        let edges = scene.edge_cache.feature_edges(o, angle_degrees, || {
+            feature_edges(&obj.mesh.vertices, &obj.mesh.simplices, angle_degrees)
+        })?;
+        if edges.is_empty() {
+            continue;
+        }
         let star = star(obj.mesh.vertices.len(), &obj.mesh.simplices);
         let first = scene.offsets[o];
         let pieces: Vec<Vec<EdgeSegment<N>>> = edges

@@ -32,7 +32,7 @@ mod trace;
 mod tests;
 
 pub use shade::shade_hit;
-pub use trace::trace;
+pub use trace::{slabs, trace, trace_slab};
 
 use std::sync::atomic::{AtomicBool, AtomicUsize};
 

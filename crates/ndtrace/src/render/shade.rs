@@ -234,7 +234,7 @@ pub(crate) fn id_color(id: u32) -> Rgb {
 pub(crate) fn depth_range<const N: usize>(scene: &Scene<N>) -> (f64, f64) {
     let mut lo = [f64::INFINITY; N];
     let mut hi = [f64::NEG_INFINITY; N];
-    for o in &scene.objects {
+    for o in scene.objects.iter() {
         for v in &o.mesh.vertices {
             for k in 0..N {
                 lo[k] = lo[k].min(v[k]);

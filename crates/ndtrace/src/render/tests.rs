@@ -442,7 +442,10 @@ samples = SAMPLES
 fn skipping_convex_objects_changes_nothing<const N: usize>(scene: &mut Scene<N>) -> usize {
     let fast = trace(scene, &Progress::default()).unwrap();
     let convex = scene.objects.iter().filter(|o| o.convex.is_some()).count();
-    scene.objects.iter_mut().for_each(|o| o.convex = None);
+    std::sync::Arc::get_mut(&mut scene.objects)
+        .expect("a scene of its own")
+        .iter_mut()
+        .for_each(|o| o.convex = None);
     let slow = trace(scene, &Progress::default()).unwrap();
     assert!(fast
         .rgba
@@ -688,7 +691,7 @@ fn scenes_built_with_the_morton_bvh_render_bit_for_bit_as_with_the_sah_one() {
         for g in 0..sah.simplex_count() as u32 {
             assert_eq!(sah.flat_normal(g), mor.flat_normal(g), "flat normal {g}");
         }
-        for (a, b) in sah.objects.iter().zip(&mor.objects) {
+        for (a, b) in sah.objects.iter().zip(mor.objects.iter()) {
             assert_eq!(a.convex, b.convex);
         }
         let p = Progress::default();
@@ -753,4 +756,160 @@ transform = [{ scale = 0.5 }, { translate = [0.8, 0.3, 0.9] }]
 shadows = true
 "#,
     );
+}
+
+/// Every slab cut of the retina, traced slab by slab and concatenated, is the retina traced
+/// whole, bit for bit (jittered samples, culling, shadows, a surface splatted over the cells it
+/// covers, N = 2 … 5); ranges that are not whole chunks are refused.
+#[test]
+fn slabs_traced_apart_and_concatenated_are_the_whole_retina() {
+    fn check<const N: usize>(scene: &Scene<N>) -> usize {
+        let whole = trace(scene, &Progress::default()).unwrap();
+        let total = scene.camera.cell_count();
+        let mut cuts = 0;
+        for count in [1, 2, 3, 7, 1000] {
+            let cut = slabs(scene, count);
+            assert_eq!(cut.first().unwrap().start, 0);
+            assert_eq!(cut.last().unwrap().end, total);
+            assert!(cut
+                .windows(2)
+                .all(|w| w[0].end == w[1].start && w[0].start < w[0].end));
+            assert!(cut.len() <= count);
+            let mut joined = Retina {
+                dim: N,
+                shape: scene.camera.numpy_shape(),
+                rgba: vec![],
+                depth: vec![],
+                normal: vec![],
+                object_id: vec![],
+                primitive_id: vec![],
+            };
+            for range in cut.clone() {
+                let progress = Progress::default();
+                let part = trace_slab(scene, &progress, range.clone()).unwrap();
+                assert_eq!(part.shape, vec![range.len()]);
+                assert_eq!(
+                    progress.done.load(std::sync::atomic::Ordering::Relaxed),
+                    range.len()
+                );
+                joined.rgba.extend(part.rgba);
+                joined.depth.extend(part.depth);
+                joined.normal.extend(part.normal);
+                joined.object_id.extend(part.object_id);
+                joined.primitive_id.extend(part.primitive_id);
+            }
+            // The first cell whose bits differ, if any (not the whole arrays in the message).
+            let bits = |r: &Retina, c: usize| {
+                let f = |v: &[f32], w: usize| {
+                    v[c * w..(c + 1) * w]
+                        .iter()
+                        .map(|x| x.to_bits())
+                        .collect::<Vec<_>>()
+                };
+                (
+                    f(&r.rgba, 4),
+                    f(&r.depth, 1),
+                    f(&r.normal, N),
+                    r.object_id[c],
+                    r.primitive_id[c],
+                )
+            };
+            assert_eq!(joined.depth.len(), total);
+            let differs = (0..total).find(|&c| bits(&joined, c) != bits(&whole, c));
+            assert_eq!(
+                differs, None,
+                "{count} slabs, N = {N}: first differing cell"
+            );
+            cuts = cuts.max(cut.len());
+        }
+        // Not whole chunks, reversed, or beyond the retina: refused, naming the argument.
+        let chunk = slabs(scene, 1000)[0].len();
+        let mut bads = vec![1..total, 0..total + 1, chunk..chunk - 1];
+        if total > chunk + 1 {
+            bads.push(0..chunk + 1); // an end inside a chunk
+        }
+        for bad in bads {
+            match trace_slab(scene, &Progress::default(), bad.clone()) {
+                Err(crate::NdError::Value { arg, message }) => {
+                    assert_eq!(arg, "cells");
+                    assert!(message.contains("whole chunks"), "{message}");
+                }
+                other => panic!("{bad:?}: {:?}", other.map(|r| r.shape)),
+            }
+        }
+        assert!(whole.object_id.iter().any(|&o| o >= 0));
+        cuts
+    }
+    let common = "[[lights]]\ntype = \"point\"\nposition = [2.0, 2.5, 1.5, 2.0, 1.0]\n\
+                  [[objects]]\nshape = \"hypercube\"\ntransform = [{ scale = 0.4 }, { rotate = \
+                  { plane = [0, 1], degrees = 20 } }]\n[[objects]]\nshape = \"sphere\"\n\
+                  subdivisions = 2\ntransform = [{ scale = 0.3 }, { translate = [0.5, 0.4, 0.3, \
+                  0.2, 0.1] }]\n[render]\nshadows = true\ncull_backfaces = true\nsamples = 3\n";
+    let camera = |dim: usize, res: &str| {
+        let pos: Vec<String> = (0..dim)
+            .map(|i| format!("{}", 1.0 + 0.7 * i as f64))
+            .collect();
+        // Up vectors e_1 … e_{N−2}.
+        let up: Vec<String> = (1..dim - 1)
+            .map(|k| {
+                format!(
+                    "[{}]",
+                    (0..dim)
+                        .map(|i| if i == k { "1" } else { "0" })
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })
+            .collect();
+        let up = if dim > 2 {
+            format!("up = [{}]\n", up.join(", "))
+        } else {
+            String::new()
+        };
+        format!(
+            "dim = {dim}\n[camera]\nposition = [{}]\nlook_at = [{}]\n{up}fov = 60.0\n\
+             resolution = {res}\n",
+            pos.join(", "),
+            vec!["0.0"; dim].join(", ")
+        )
+    };
+    let fit = |text: String, dim: usize| {
+        // Points of the common text have 5 coordinates: keep the scene's `dim`.
+        text.replace(
+            "[2.0, 2.5, 1.5, 2.0, 1.0]",
+            &format!("[{}]", vec!["2.0"; dim].join(", ")),
+        )
+        .replace(
+            "[0.5, 0.4, 0.3, 0.2, 0.1]",
+            &format!("[{}]", vec!["0.3"; dim].join(", ")),
+        )
+    };
+    let parsed = |text: String| load_toml_str(&text, "slabs.toml", None).unwrap().1;
+    let mut most = 0;
+    // Retinas of one chunk and of several: N = 2 (chunks in memory order), N = 3 (strips of
+    // tiled rows, the last chunk short), N = 4 and 5.
+    for (dim, res) in [
+        (2, "300"),
+        (2, "13000"),
+        (3, "[61, 47]"),
+        (3, "[128, 100]"),
+        (4, "[23, 19, 17]"),
+        (5, "[12, 11, 10, 9]"),
+        (5, "[9, 7, 6, 5]"),
+    ] {
+        let text = fit(format!("{}{common}", camera(dim, res)), dim);
+        most = most.max(crate::with_scene!(&parsed(text), s, _N => check(s)));
+    }
+    // A 4D scene with a surface splatted over part of the retina.
+    let surface = fit(
+        format!(
+            "{}{common}[[objects]]\nshape = \"surface\"\nvertices = [[-1, -1, 0, 0.5], \
+             [1, -1, 0, 0.5], [1, 1, 0, 0.5]]\ntriangles = [[0, 1, 2]]\nwidth = 2.0\n\
+             material = {{ opacity = 0.6 }}\n",
+            camera(4, "[40, 36, 30]")
+        ),
+        4,
+    );
+    most = most.max(crate::with_scene!(&parsed(surface), s, _N => check(s)));
+    assert!(most >= 3, "the retinas cut into several slabs ({most})");
 }

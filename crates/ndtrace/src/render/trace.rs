@@ -1,5 +1,6 @@
 //! [`trace`]: the retina, chunk by chunk in parallel, each chunk group by group, each cell's
-//! value from its rays.
+//! value from its rays; [`trace_slab`]: the same for a run of whole chunks (a slab of the
+//! retina traced elsewhere, e.g. on a Dask worker), with the same bits for each cell.
 
 use super::packets::{GroupTracer, ObjectShading};
 use super::pool;
@@ -13,37 +14,97 @@ use crate::scene::desc::RenderMode;
 use crate::scene::Scene;
 use crate::{NdError, NdResult};
 use rayon::prelude::*;
+use std::ops::Range;
 use std::sync::atomic::Ordering;
 
 /// Traces every retina cell of `scene` (on the current rayon pool), then projects its surface
 /// objects into the retina ([`crate::surface::splat`]).
 pub fn trace<const N: usize>(scene: &Scene<N>, progress: &Progress) -> NdResult<Retina> {
+    let mut retina = trace_cells(scene, progress, 0..scene.camera.cell_count())?;
+    retina.shape = scene.camera.numpy_shape();
+    Ok(retina)
+}
+
+/// The retina cells `cells` of `scene` (a range of cell indices in memory order, from
+/// [`slabs`]: whole chunks of the tracing order), each with the bits [`trace`] gives it. The
+/// result is flat: its `shape` is `[cells.len()]`. Concatenating the slabs of [`slabs`] in
+/// order gives [`trace`]'s retina.
+pub fn trace_slab<const N: usize>(
+    scene: &Scene<N>,
+    progress: &Progress,
+    cells: Range<usize>,
+) -> NdResult<Retina> {
+    let cam = &scene.camera;
+    let (chunk, _) = chunking(cam.resolution[0], N - 1);
+    let total = cam.cell_count();
+    if cells.start > cells.end
+        || cells.end > total
+        || !cells.start.is_multiple_of(chunk)
+        || (!cells.end.is_multiple_of(chunk) && cells.end != total)
+    {
+        return Err(NdError::Value {
+            arg: "cells".into(),
+            message: format!(
+                "expected a slab of whole chunks of {chunk} cells within 0..{total} \
+                 (from the scene's slabs), got {}..{}",
+                cells.start, cells.end
+            ),
+        });
+    }
+    trace_cells(scene, progress, cells)
+}
+
+/// The cut of the retina of `scene` into `count` slabs of whole chunks (at most one per
+/// chunk, at least one), as even as chunks allow, in order: cell ranges for [`trace_slab`].
+pub fn slabs<const N: usize>(scene: &Scene<N>, count: usize) -> Vec<Range<usize>> {
+    let cam = &scene.camera;
+    let (chunk, _) = chunking(cam.resolution[0], N - 1);
+    let total = cam.cell_count();
+    let chunks = total.div_ceil(chunk);
+    let count = count.clamp(1, chunks.max(1));
+    (0..count)
+        .map(|k| {
+            let (a, b) = (chunks * k / count, chunks * (k + 1) / count);
+            (a * chunk).min(total)..(b * chunk).min(total)
+        })
+        .collect()
+}
+
+/// [`trace_slab`] without the check: culling, the cells' rays, then the surfaces' fragments
+/// that fall on those cells.
+fn trace_cells<const N: usize>(
+    scene: &Scene<N>,
+    progress: &Progress,
+    cells: Range<usize>,
+) -> NdResult<Retina> {
     // Back-face culling (course notes): discard a simplex when det[x_1−x_0 … | C − x_0] < 0,
     // i.e. when its normal points away from the eye. The eye is fixed per trace.
     if scene.render.cull_backfaces {
         let culled = scene.backfaces();
-        trace_accepting(scene, progress, |id| !culled[id as usize])
+        trace_accepting(scene, progress, cells.clone(), |id| !culled[id as usize])
     } else {
-        trace_accepting(scene, progress, |_| true)
+        trace_accepting(scene, progress, cells.clone(), |_| true)
     }
     .and_then(|mut retina| {
         // Surfaces ("bear hair"), projected over what the rays saw.
-        crate::surface::splat(scene, &mut retina, progress)?;
+        crate::surface::splat(scene, &mut retina, cells.start, progress)?;
         Ok(retina)
     })
 }
 
-/// [`trace`] with camera rays that see only the simplices whose global id passes `accept`.
+/// The cells `cells` (whole chunks) with camera rays that see only the simplices whose
+/// global id passes `accept`.
 fn trace_accepting<const N: usize, F>(
     scene: &Scene<N>,
     progress: &Progress,
+    range: Range<usize>,
     accept: F,
 ) -> NdResult<Retina>
 where
     F: Fn(u32) -> bool + Sync,
 {
     let cam = &scene.camera;
-    let cells = cam.cell_count();
+    let cells = range.len();
     // Kept buffers when the last retina's were handed back ([`pool`]), not cleared: the loop
     // writes every element of every cell, misses included.
     let mut rgba = pool::take::<f32>(cells * 4);
@@ -65,6 +126,8 @@ where
     let (chunk_cells, tiled) = chunking(row, N - 1);
     // The order of a whole chunk, when there is one (the last chunk may be shorter).
     let tiles = (tiled && chunk_cells <= cells).then(|| tile_order(row, chunk_cells / row));
+    // The slab's first chunk (a whole number of chunks from the retina's start).
+    let first_chunk = range.start / chunk_cells;
     // One sample per cell: its centre.
     let centre = CentreRays::new(cam);
     let shading = ObjectShading::all(scene);
@@ -75,7 +138,8 @@ where
         .zip(primitive_id.par_chunks_mut(chunk_cells))
         .enumerate()
         .for_each(
-            |(chunk, ((((rgba, depth), normal), object_id), primitive_id))| {
+            |(local, ((((rgba, depth), normal), object_id), primitive_id))| {
+                let chunk = first_chunk + local;
                 if progress.cancel.load(Ordering::Relaxed) {
                     return;
                 }
@@ -158,7 +222,7 @@ where
     }
     Ok(Retina {
         dim: N,
-        shape: cam.numpy_shape(),
+        shape: vec![cells],
         rgba,
         depth,
         normal,

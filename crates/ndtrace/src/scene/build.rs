@@ -19,6 +19,7 @@ use crate::shapes;
 use rayon::prelude::*;
 use std::borrow::Cow;
 use std::path::Path;
+use std::sync::Arc;
 
 /// Largest number of rays per retina cell accepted.
 pub const MAX_SAMPLES: u32 = 4096;
@@ -94,8 +95,9 @@ pub struct Object<const N: usize> {
 pub struct Scene<const N: usize> {
     /// The camera.
     pub camera: Camera<N>,
-    /// Objects, indexed by object id.
-    pub objects: Vec<Object<N>>,
+    /// Objects, indexed by object id (shared by the scenes [`Scene::with_camera`] makes). Their
+    /// geometry must not change after the build: the BVH and the feature-edge cache describe it.
+    pub objects: Arc<Vec<Object<N>>>,
     /// Lights.
     pub lights: Vec<Light<N>>,
     /// Ambient light colour.
@@ -105,10 +107,11 @@ pub struct Scene<const N: usize> {
     /// Tracing options.
     pub render: RenderDesc,
     /// BVH over every non-degenerate simplex; hit ids are global ids (see [`Scene::locate`]).
-    pub bvh: Bvh<N>,
+    /// Shared by the scenes [`Scene::with_camera`] makes.
+    pub bvh: Arc<Bvh<N>>,
     /// Per global simplex id, where the BVH keeps its prepared simplex (see
     /// [`Bvh::id_slots`]): the flat normals are read from there, not stored twice.
-    normal_slots: Vec<u32>,
+    normal_slots: Arc<Vec<u32>>,
     /// First global id of each object's simplices.
     pub offsets: Vec<u32>,
     /// Simplices skipped because they have no volume.
@@ -117,9 +120,43 @@ pub struct Scene<const N: usize> {
     pub extent: f64,
     /// Warnings for the user (e.g. skipped degenerate simplices).
     pub warnings: Vec<String>,
+    /// The objects' feature edges, found on first use (shared like the BVH).
+    pub(crate) edge_cache: Arc<crate::edges::EdgeCache>,
 }
 
 impl<const N: usize> Scene<N> {
+    /// This scene seen by the camera `camera` (with the `[composite]` options `composite`
+    /// checked against its retina): what building the description with that camera gives,
+    /// bit for bit — nothing of a build but the camera and that check depends on the camera —
+    /// sharing the objects and the BVH instead of building them again (animation frames that
+    /// move only the camera).
+    pub fn with_camera(
+        &self,
+        camera: &CameraDesc,
+        composite: Option<&crate::composite::CompositeOptions>,
+    ) -> R<Scene<N>> {
+        let camera = self::camera::<N>(camera, self.render.samples)?;
+        if let Some(c) = composite {
+            c.validate_for(&camera.numpy_shape(), true)
+                .map_err(|e| PathError::new(format!("composite.{}", e.key), e.message))?;
+        }
+        Ok(Scene {
+            camera,
+            objects: Arc::clone(&self.objects),
+            lights: self.lights.clone(),
+            ambient: self.ambient,
+            background: self.background,
+            render: self.render.clone(),
+            bvh: Arc::clone(&self.bvh),
+            normal_slots: Arc::clone(&self.normal_slots),
+            offsets: self.offsets.clone(),
+            skipped_degenerate: self.skipped_degenerate,
+            extent: self.extent,
+            warnings: self.warnings.clone(),
+            edge_cache: Arc::clone(&self.edge_cache),
+        })
+    }
+
     /// (object id, simplex index within the object) of a global simplex id.
     #[inline]
     pub fn locate(&self, global: u32) -> (usize, usize) {
@@ -1002,17 +1039,18 @@ pub(crate) fn build_using<const N: usize>(
     }
     Ok(Scene {
         camera,
-        objects,
+        objects: Arc::new(objects),
         lights,
         ambient,
         background,
         render: desc.render.clone(),
-        bvh,
-        normal_slots,
+        bvh: Arc::new(bvh),
+        normal_slots: Arc::new(normal_slots),
         offsets,
         skipped_degenerate: skipped,
         extent,
         warnings,
+        edge_cache: Arc::default(),
     })
 }
 

@@ -200,6 +200,29 @@ pub fn animation_frame(desc: &SceneDesc, k: u32, name: &str) -> NdResult<SceneDe
     animation::frame_desc(desc, k).map_err(|e| locate(&Source::Unlocated(name), None, e))
 }
 
+/// Frame `k` of the `[animation]` of `desc` (built as `scene`) when the animation moves only
+/// the camera: the frame's description ([`animation_frame`]) and its scene, sharing `scene`'s
+/// objects and BVH ([`Scene::with_camera`]; bit for bit the scene a build of that description
+/// gives). `None` when the animation moves objects (or there is none): build the frame then.
+pub fn camera_frame(
+    desc: &SceneDesc,
+    scene: &AnyScene,
+    k: u32,
+    name: &str,
+) -> Option<NdResult<(SceneDesc, AnyScene)>> {
+    let a = desc.animation.as_ref()?;
+    if !matches!(&a.target, desc::AnimationTarget::Named(n) if n == "camera") {
+        return None;
+    }
+    Some(animation_frame(desc, k, name).and_then(|frame| {
+        let built = with_scene!(scene, s, _N => s
+            .with_camera(&frame.camera, frame.composite.as_ref())
+            .map(IntoAny::into_any));
+        let built = built.map_err(|e| locate(&Source::Unlocated(name), None, e))?;
+        Ok((frame, built))
+    }))
+}
+
 /// Serializes a description as TOML (the inverse of [`load_toml_str`] for the description).
 pub fn to_toml(desc: &SceneDesc) -> NdResult<String> {
     toml::to_string(desc).map_err(|e| NdError::Value {
@@ -248,6 +271,7 @@ impl AnyScene {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::Arc;
 
     /// The boundary of the regular N-simplex seen from +x_N, in dimension `dim`.
     fn simplex_scene(dim: usize) -> String {
@@ -596,5 +620,60 @@ transform = [{ scale = 0.5 }, { rotate = { quaternions = [[0.6, 0, 0.8, 0], [0.5
         assert!(err(&with(nan, 3, s.clone())).contains("objects[0].vertices[1][1]: non-finite"));
         let wide = with(vec![0.0; 8], 4, s);
         assert!(err(&wide).contains("objects[0].vertices[0]: expected 3 numbers (dim = 3), got 4"));
+    }
+
+    #[test]
+    fn camera_frames_share_the_bvh_and_trace_as_the_frames_built_anew() {
+        let text = |target: &str, extra: &str| {
+            format!(
+                "dim = 4\n[camera]\nposition = [0.6, 0.9, 1.3, 3.5]\nlook_at = [0, 0, 0, 0]\n\
+                 up = [[0, 1, 0, 0], [0, 0, 1, 0]]\nfov = 50\nresolution = [14, 12, 10]\n\
+                 [[lights]]\ntype = \"point\"\nposition = [2, 2, 1, 2]\n\
+                 [[objects]]\nshape = \"hypercube\"\ntransform = [{{ scale = 0.6 }}]\n\
+                 [[objects]]\nshape = \"sphere\"\nsubdivisions = 2\n\
+                 transform = [{{ scale = 0.3 }}, {{ translate = [0.5, 0.4, 0.2, 0.3] }}]\n\
+                 [render]\nsamples = 2\nshadows = true\ncull_backfaces = true\n{extra}\
+                 [animation]\nframes = 4\ntarget = {target}\n\
+                 sweep = {{ plane = [0, 3], degrees = [0, 120] }}\n"
+            )
+        };
+        let (desc, scene) = load_toml_str(&text("\"camera\"", ""), "cam.toml", None).unwrap();
+        let bits = |s: &AnyScene| {
+            let r = with_scene!(s, s, _N => crate::render::trace(s, &Default::default()).unwrap());
+            let f = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            (
+                f(&r.rgba),
+                f(&r.depth),
+                f(&r.normal),
+                r.object_id,
+                r.primitive_id,
+            )
+        };
+        let mut frames = Vec::new();
+        for k in 0..4 {
+            let (frame, shared) = camera_frame(&desc, &scene, k, "cam.toml").unwrap().unwrap();
+            assert_eq!(frame, animation_frame(&desc, k, "cam.toml").unwrap());
+            let built = build_any(&frame, None, None).unwrap();
+            let traced = bits(&shared);
+            assert_eq!(traced, bits(&built), "frame {k}");
+            match (&scene, &shared) {
+                (AnyScene::D4(a), AnyScene::D4(b)) => {
+                    assert!(Arc::ptr_eq(&a.bvh, &b.bvh) && Arc::ptr_eq(&a.objects, &b.objects))
+                }
+                _ => panic!("dim 4"),
+            }
+            frames.push(traced);
+        }
+        // The camera moves: the frames differ.
+        assert!(frames[1..].iter().all(|f| *f != frames[0]));
+        // Animations of objects are built frame by frame; frames that do not exist are refused.
+        let (d, s) = load_toml_str(&text("\"objects\"", ""), "obj.toml", None).unwrap();
+        assert!(camera_frame(&d, &s, 0, "obj.toml").is_none());
+        let err = camera_frame(&desc, &scene, 4, "cam.toml")
+            .unwrap()
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("animation.frames"), "{err}");
     }
 }

@@ -180,12 +180,13 @@ fn cells_in(lo: f64, hi: f64, r: usize) -> Option<(usize, usize)> {
     (a <= b).then_some((a as usize, b as usize))
 }
 
-/// The fragments of one triangle (world vertices `p`) of sheet width `width`, those nearer than
-/// the traced scene's `depth`, appended to `out`.
+/// The fragments of one triangle (world vertices `p`) of sheet width `width`, those on the
+/// traced cells (`depth` of the cells from `first` on) and nearer than their hits, appended to
+/// `out`.
 #[allow(clippy::too_many_arguments)]
 fn triangle_fragments<const N: usize>(
     map: &RetinaMap<'_, N>,
-    depth: &[f32],
+    (first, depth): (usize, &[f32]),
     p: [Vector<N>; 3],
     width: f64,
     obj: u32,
@@ -228,7 +229,8 @@ fn triangle_fragments<const N: usize>(
             std::array::from_fn(|k| bary[0] * p[0][k] + bary[1] * p[1][k] + bary[2] * p[2][k]);
         let dep = map.depth(&pt);
         let cell = map.cell(i);
-        if dep < depth[cell] as f64 {
+        let on_slab = cell.checked_sub(first).filter(|&c| c < depth.len());
+        if on_slab.is_some_and(|c| dep < depth[c] as f64) {
             out.push(Fragment {
                 cell,
                 depth: dep,
@@ -282,7 +284,7 @@ fn triangle_fragments<const N: usize>(
 /// triangle's bounding box of cells.
 fn fragment_bound<const N: usize>(map: &RetinaMap<'_, N>, scene: &Scene<N>) -> f64 {
     let mut total = 0.0;
-    for o in &scene.objects {
+    for o in scene.objects.iter() {
         let Some(s) = &o.surface else { continue };
         total += s
             .triangles
@@ -313,10 +315,13 @@ fn fragment_bound<const N: usize>(map: &RetinaMap<'_, N>, scene: &Scene<N>) -> f
 /// Projects the surface objects of `scene` (N = 4) into its traced `retina`: their fragments
 /// nearer than the traced hits, blended over them front to back (module docs); the retina's
 /// depth, normal (the unit normal facing the eye, [`super::shade`]) and ids become those of the
-/// nearest surface where one is in front. Does nothing for scenes without surfaces.
+/// nearest surface where one is in front. Does nothing for scenes without surfaces. `retina`
+/// may be a slab of the retina, its cells from `first` on (fragments on other cells are
+/// dropped; each cell gets the bits it gets in the whole retina).
 pub fn splat<const N: usize>(
     scene: &Scene<N>,
     retina: &mut Retina,
+    first: usize,
     progress: &Progress,
 ) -> NdResult<()> {
     if N != 4 || scene.objects.iter().all(|o| o.surface.is_none()) {
@@ -357,7 +362,15 @@ pub fn splat<const N: usize>(
             let end = ((chunk + 1) * CHUNK).min(s.triangles.len());
             for t in chunk * CHUNK..end {
                 let p = s.triangles[t].map(|i| o.mesh.vertices[i as usize]);
-                triangle_fragments(&map, depth, p, s.width, oi as u32, t as u32, &mut out);
+                triangle_fragments(
+                    &map,
+                    (first, depth),
+                    p,
+                    s.width,
+                    oi as u32,
+                    t as u32,
+                    &mut out,
+                );
             }
             out
         })
@@ -442,7 +455,7 @@ pub fn splat<const N: usize>(
                     break;
                 }
             }
-            let cell = cell_frags[0].cell;
+            let cell = cell_frags[0].cell - first;
             let px: [f32; 4] =
                 std::array::from_fn(|j| (acc[j] + through * rgba_in[cell * 4 + j] as f64) as f32);
             let nearest = layers[0];

@@ -1,0 +1,243 @@
+"""Scale-out on Dask distributed (``pip install ndtrace[dask]``): a retina traced in slabs on
+the workers (``ndtrace.trace(scene, client=…)``) and an animation's frames rendered on them
+(``ndtrace.animate(scene, out, client=…)``); the CLI's ``--dask`` (``local``: a LocalCluster on
+this machine, or ``tcp://HOST:PORT``)::
+
+    from dask.distributed import Client, LocalCluster
+    client = Client(LocalCluster(n_workers=2, threads_per_worker=1))
+    retina = ndtrace.trace(scene, client=client)       # bit-identical to ndtrace.trace(scene)
+    ndtrace.animate(scene, "spin.gif", client=client)  # frames on the workers, written here
+
+How it stays exact: a slab is a run of whole chunks of the tracer's order (the core's
+``slabs``), and every cell's value depends only on the scene, the seed and the cell's index,
+so the slabs traced on the workers and joined in order are the retina traced here, bit for
+bit; an animation frame is rendered by the same function as without Dask. (Bit for bit
+assumes the workers run the same ndtrace build on the same platform as here.) The scene goes
+to every worker once (pickled: its description; each worker builds it once, on first use); a
+mesh ``file`` of the scene must be readable at the same path on the workers. Each task traces
+with ``threads`` threads, default 1: a worker runs as many tasks at once as it has threads.
+
+Progress counts cells of finished slabs (or frames). Ctrl-C cancels the tasks not yet run and
+stops the running traces within a fraction of a second (they watch a Dask ``Event``; a frame
+being built or composited finishes that step first); a worker that dies has its tasks re-run
+elsewhere by the scheduler (up to its ``allowed-failures``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import threading
+import time
+import uuid
+from typing import Any, Callable, Iterator
+
+import numpy as np
+
+__all__ = ["connect", "distributed_module", "trace_slabs", "render_frames", "SLABS_PER_THREAD"]
+
+#: Slabs per worker thread of a distributed trace: enough for even load and steady progress,
+#: few enough that a slab's fixed cost (a task, culling, a thread pool) stays small.
+SLABS_PER_THREAD = 4
+
+_FIELDS = ("rgba", "depth", "normal", "object_id", "primitive_id")
+
+
+def distributed_module():
+    try:
+        import distributed
+    except ImportError:
+        raise ImportError(
+            "rendering on Dask needs dask.distributed: pip install 'ndtrace[dask]'") from None
+    return distributed
+
+
+def _check_client(client: Any):
+    distributed = distributed_module()
+    if not isinstance(client, distributed.Client):
+        raise TypeError(f"client: expected a dask.distributed.Client, got {type(client).__name__}")
+    if client.asynchronous:
+        raise ValueError("client: expected a synchronous Dask client, got an asynchronous one "
+                         "(Client(asynchronous=True))")
+    if client.status not in ("running", "connecting", "newly-created"):
+        raise ValueError(f"client: the Dask client is {client.status}, not running")
+    return distributed
+
+
+@contextlib.contextmanager
+def connect(address: str) -> Iterator[Any]:
+    """A Dask client for the CLI's ``--dask ADDRESS``: ``local`` starts a LocalCluster on this
+    machine (worker processes; it and its HTTP server bound to 127.0.0.1; closed on exit), anything
+    else is a scheduler address (``tcp://HOST:PORT``)."""
+    distributed = distributed_module()
+    if address == "local":
+        cluster = distributed.LocalCluster(host="127.0.0.1", dashboard_address="127.0.0.1:0",
+                                           processes=True, silence_logs=logging.ERROR)
+        try:
+            with distributed.Client(cluster) as client:
+                # Ctrl-C reaches the workers too (one process group): this process stops them.
+                client.register_plugin(_ignore_sigint())
+                yield client
+        finally:
+            cluster.close()
+        return
+    if "://" not in address:
+        raise ValueError(f"--dask {address}: expected 'local' or a scheduler address "
+                         "tcp://HOST:PORT")
+    try:
+        client = distributed.Client(address, timeout="10s")
+    except OSError as e:
+        raise ValueError(f"--dask {address}: cannot reach the Dask scheduler: {e}") from None
+    with client:
+        yield client
+
+
+def _ignore_sigint():
+    """A worker plugin that makes the workers of a LocalCluster ignore SIGINT (Ctrl-C in the
+    terminal signals the whole process group): the client cancels their tasks instead, and
+    closing the cluster ends them, without a traceback from each worker."""
+    import signal
+
+    from distributed import WorkerPlugin
+
+    class IgnoreSigint(WorkerPlugin):
+        name = "ndtrace-ignore-sigint"
+
+        def setup(self, worker) -> None:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+    return IgnoreSigint()
+
+
+#: Held while a worker builds a scene, so that its concurrent tasks build it once.
+_BUILD_LOCK = threading.Lock()
+
+
+def _built(scene):
+    """``scene.compiled()``, built by one of a worker's tasks while the others wait."""
+    with _BUILD_LOCK:
+        return scene.compiled()
+
+
+class _Cancelled(Exception):
+    """Raised in a worker's progress callback when the client asked to stop."""
+
+
+def _watcher(cancel: str) -> Callable[[int, int], None]:
+    """A trace progress callback that raises :class:`_Cancelled` once the Dask ``Event``
+    ``cancel`` is set (checked at most five times a second)."""
+    from distributed import Event
+
+    event = Event(cancel)
+    last = [0.0]
+
+    def tick(_done: int, _total: int) -> None:
+        now = time.monotonic()
+        if now - last[0] >= 0.2:
+            last[0] = now
+            if event.is_set():
+                raise _Cancelled(cancel)
+
+    return tick
+
+
+def _trace_slab(scene, cells: tuple[int, int], threads: int | None, cancel: str) -> dict:
+    """Task: the cells ``cells`` of ``scene``'s retina, flat (the core's ``trace(cells=…)``)."""
+    out = _built(scene).trace(threads or 1, _watcher(cancel), cells)
+    return {k: out[k] for k in _FIELDS}
+
+
+def _gather(client, submit: Callable[[str], list], weights: list[int],
+            progress: Callable[[int, int], object] | None,
+            on_result: Callable[[int, Any], None]) -> None:
+    """Submits the tasks (``submit(cancel)``: futures whose tasks watch the Dask ``Event``
+    named ``cancel``) and waits for them, calling ``on_result(index, value)`` in completion
+    order and ``progress(done, total)`` by ``weights``; a finished future is let go at once.
+    On any error or Ctrl-C (submitting included): sets the event (running tasks stop; it
+    stays set, named for this call only), cancels the rest, and re-raises."""
+    distributed = distributed_module()
+    cancel = f"ndtrace-cancel-{uuid.uuid4().hex}"
+    event = distributed.Event(cancel, client=client)
+    futures: list = []
+    try:
+        futures = submit(cancel)
+        index = {f.key: i for i, f in enumerate(futures)}
+        total, done = sum(weights), 0
+        if progress is not None:
+            progress(0, total)
+        for future in distributed.as_completed(futures):
+            i = index[future.key]
+            value = future.result()
+            futures[i] = None
+            on_result(i, value)
+            done += weights[i]
+            if progress is not None:
+                progress(done, total)
+    except BaseException:
+        with contextlib.suppress(Exception):
+            event.set()
+        with contextlib.suppress(Exception):
+            client.cancel([f for f in futures if f is not None])
+        raise
+
+
+def trace_slabs(scene, client, threads: int | None,
+                progress: Callable[[int, int], object] | None) -> dict:
+    """The retina of ``scene`` traced in slabs on ``client``'s workers: a dict of numpy arrays
+    as ``CompiledScene.trace`` gives, bit-identical to it."""
+    _check_client(client)
+    compiled = scene.compiled()
+    shape = tuple(compiled.retina_shape)
+    slots = sum(client.nthreads().values()) or 1
+    slabs = compiled.slabs(SLABS_PER_THREAD * slots)
+    token = uuid.uuid4().hex
+
+    def submit(cancel: str) -> list:
+        [shared] = client.scatter([scene], broadcast=True, hash=False)
+        return [client.submit(_trace_slab, shared, slab, threads, cancel,
+                              key=f"ndtrace-slab-{token}-{i}", pure=False)
+                for i, slab in enumerate(slabs)]
+
+    parts: list = [None] * len(slabs)
+    _gather(client, submit, [b - a for a, b in slabs], progress,
+            lambda i, value: parts.__setitem__(i, value))
+    out: dict = {"dim": compiled.dim}
+    for name in _FIELDS:
+        joined = np.concatenate([p[name] for p in parts])
+        extra = joined.shape[1:]
+        out[name] = joined.reshape(shape + extra)
+    return out
+
+
+def _render_frame(animated, k: int, threads: int | None, options: dict, cancel: str):
+    """Task: frame ``k`` of an animation, traced and composited (``animation.render_frame``)."""
+    from .animation import render_frame
+
+    _built(animated)
+    return render_frame(animated, k, threads or 1, options, _watcher(cancel))
+
+
+def render_frames(animated, count: int, client, threads: int | None, options: dict,
+                  cells: int, progress: Callable[[int, int], object] | None,
+                  on_frame: Callable[[int, np.ndarray], None]) -> None:
+    """Frames ``0 … count−1`` of ``animated`` rendered on ``client``'s workers; ``on_frame(k,
+    picture)`` is called here in frame order (frames that finish early wait their turn)."""
+    _check_client(client)
+    token = uuid.uuid4().hex
+
+    def submit(cancel: str) -> list:
+        [shared] = client.scatter([animated], broadcast=True, hash=False)
+        return [client.submit(_render_frame, shared, k, threads, options, cancel,
+                              key=f"ndtrace-frame-{token}-{k}", pure=False)
+                for k in range(count)]
+
+    waiting: dict[int, np.ndarray] = {}
+    following = [0]
+
+    def arrived(k: int, picture: np.ndarray) -> None:
+        waiting[k] = picture
+        while following[0] in waiting:
+            on_frame(following[0], waiting.pop(following[0]))
+            following[0] += 1
+
+    _gather(client, submit, [cells] * count, progress, arrived)
