@@ -122,6 +122,21 @@ def test_animation_frames_rendered_on_workers_are_the_local_files(client, tmp_pa
     assert sorted({d for d, _ in calls}) == [k * cells for k in range(6)]
 
 
+def test_a_workers_error_reaches_the_caller_saying_where_it_came_from(client, tmp_path):
+    # A mesh file the workers cannot read (gone after the scene was built here).
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    path = tmp_path / "tet.npz"
+    np.savez(path, vertices=v, simplices=np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
+    scene = ndtrace.load_toml(f"dim = 3\n[camera]\nposition = [2, 2, 2]\nlook_at = [0, 0, 0]\nup = [0, 0, 1]\n"
+                              f"fov = 40\nresolution = 16\n[[objects]]\nshape = \"mesh\"\n"
+                              f"file = \"{path}\"\n")
+    os.unlink(path)
+    with pytest.raises((OSError, ValueError)) as info:
+        ndtrace.trace(scene, client=client)
+    assert "tet.npz" in str(info.value)
+    assert any("raised on a Dask worker, slab 0" in n for n in getattr(info.value, "__notes__", []))
+
+
 def test_bad_clients_are_refused_by_name(client):
     scene = _scene(3, [16, 16])
     with pytest.raises(TypeError, match="client: expected a dask.distributed.Client, got str"):

@@ -147,28 +147,49 @@ def _trace_slab(scene, cells: tuple[int, int], threads: int | None, cancel: str)
     return {k: out[k] for k in _FIELDS}
 
 
-def _gather(client, submit: Callable[[str], list], weights: list[int],
-            progress: Callable[[int, int], object] | None,
+def _gather(client, scatter: Callable[[], Any], submit: Callable[[Any, int, str], Any],
+            weights: list[int], window: int | None,
+            progress: Callable[[int, int], object] | None, what: str,
             on_result: Callable[[int, Any], None]) -> None:
-    """Submits the tasks (``submit(cancel)``: futures whose tasks watch the Dask ``Event``
-    named ``cancel``) and waits for them, calling ``on_result(index, value)`` in completion
-    order and ``progress(done, total)`` by ``weights``; a finished future is let go at once.
-    On any error or Ctrl-C (submitting included): sets the event (running tasks stop; it
-    stays set, named for this call only), cancels the rest, and re-raises."""
+    """Runs task ``i`` = ``submit(shared, i, cancel)`` for every index of ``weights`` (``shared``:
+    what ``scatter()`` put on the workers; ``cancel``: the name of the Dask ``Event`` the tasks
+    watch), at most ``window`` at once (None: all), in index order, and calls
+    ``on_result(i, value)`` in completion order and ``progress(done, total)`` by ``weights``; a
+    finished future is let go at once. A task's error is re-raised here with a note naming
+    ``what`` and the index. On any error or Ctrl-C (submitting included): sets the event
+    (running tasks stop; it stays set, named for this call only), cancels the rest, and
+    re-raises."""
     distributed = distributed_module()
     cancel = f"ndtrace-cancel-{uuid.uuid4().hex}"
     event = distributed.Event(cancel, client=client)
-    futures: list = []
+    count = len(weights)
+    running: dict[str, tuple[int, Any]] = {}
     try:
-        futures = submit(cancel)
-        index = {f.key: i for i, f in enumerate(futures)}
+        shared = scatter()
+        queue = distributed.as_completed()
+        following = 0
+
+        def more() -> None:
+            nonlocal following
+            while following < count and (window is None or len(running) < window):
+                future = submit(shared, following, cancel)
+                running[future.key] = (following, future)
+                queue.add(future)
+                following += 1
+
         total, done = sum(weights), 0
+        more()
         if progress is not None:
             progress(0, total)
-        for future in distributed.as_completed(futures):
-            i = index[future.key]
-            value = future.result()
-            futures[i] = None
+        for future in queue:
+            i, _ = running.pop(future.key)
+            try:
+                value = future.result()
+            except Exception as e:
+                e.add_note(f"(raised on a Dask worker, {what} {i})")
+                raise
+            del future
+            more()
             on_result(i, value)
             done += weights[i]
             if progress is not None:
@@ -177,7 +198,7 @@ def _gather(client, submit: Callable[[str], list], weights: list[int],
         with contextlib.suppress(Exception):
             event.set()
         with contextlib.suppress(Exception):
-            client.cancel([f for f in futures if f is not None])
+            client.cancel([f for _, f in running.values()])
         raise
 
 
@@ -191,15 +212,12 @@ def trace_slabs(scene, client, threads: int | None,
     slots = sum(client.nthreads().values()) or 1
     slabs = compiled.slabs(SLABS_PER_THREAD * slots)
     token = uuid.uuid4().hex
-
-    def submit(cancel: str) -> list:
-        [shared] = client.scatter([scene], broadcast=True, hash=False)
-        return [client.submit(_trace_slab, shared, slab, threads, cancel,
-                              key=f"ndtrace-slab-{token}-{i}", pure=False)
-                for i, slab in enumerate(slabs)]
-
     parts: list = [None] * len(slabs)
-    _gather(client, submit, [b - a for a, b in slabs], progress,
+    _gather(client, lambda: client.scatter([scene], broadcast=True, hash=False)[0],
+            lambda shared, i, cancel: client.submit(
+                _trace_slab, shared, slabs[i], threads, cancel,
+                key=f"ndtrace-slab-{token}-{i}", pure=False),
+            [b - a for a, b in slabs], None, progress, "slab",
             lambda i, value: parts.__setitem__(i, value))
     out: dict = {"dim": compiled.dim}
     for name in _FIELDS:
@@ -224,13 +242,6 @@ def render_frames(animated, count: int, client, threads: int | None, options: di
     picture)`` is called here in frame order (frames that finish early wait their turn)."""
     _check_client(client)
     token = uuid.uuid4().hex
-
-    def submit(cancel: str) -> list:
-        [shared] = client.scatter([animated], broadcast=True, hash=False)
-        return [client.submit(_render_frame, shared, k, threads, options, cancel,
-                              key=f"ndtrace-frame-{token}-{k}", pure=False)
-                for k in range(count)]
-
     waiting: dict[int, np.ndarray] = {}
     following = [0]
 
@@ -240,4 +251,11 @@ def render_frames(animated, count: int, client, threads: int | None, options: di
             on_frame(following[0], waiting.pop(following[0]))
             following[0] += 1
 
-    _gather(client, submit, [cells] * count, progress, arrived)
+    # Frames go out in order, a few per worker thread at a time: the pictures that wait here
+    # for an earlier frame stay few, however long the animation.
+    slots = sum(client.nthreads().values()) or 1
+    _gather(client, lambda: client.scatter([animated], broadcast=True, hash=False)[0],
+            lambda shared, k, cancel: client.submit(
+                _render_frame, shared, k, threads, options, cancel,
+                key=f"ndtrace-frame-{token}-{k}", pure=False),
+            [cells] * count, 2 * slots, progress, "frame", arrived)
