@@ -191,6 +191,29 @@ def test_ctrl_c_stops_the_running_frames_on_the_workers_and_writes_no_video(tmp_
     assert not [p for p in os.listdir(tmp_path) if p.startswith(".ndtrace-")]
 
 
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_a_ctrl_c_that_python_swallows_in_a_finalizer_still_stops_the_render(client):
+    # A signal's handler runs wherever the main thread is; in a __del__ (a Dask future's, as a
+    # finished one is let go) its KeyboardInterrupt is printed as "Exception ignored" and lost.
+    class Finalizer:
+        def __del__(self):
+            signal.raise_signal(signal.SIGINT)
+
+    calls: list[tuple[int, int]] = []
+
+    def progress(done, total):
+        calls.append((done, total))
+        if len(calls) == 2:  # after the first slab: Ctrl-C, lost in a finalizer
+            Finalizer()
+
+    scene = _scene(4, [24, 24, 24])
+    assert len(scene.compiled().slabs(8)) > 2
+    with pytest.raises(KeyboardInterrupt):
+        ndtrace.trace(scene, client=client, progress=progress)
+    assert len(calls) == 2 and calls[-1][0] < calls[-1][1]  # stopped at once, not at the end
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
 def test_frames_of_a_worker_that_dies_are_rerun_elsewhere(tmp_path):
     data = ndtrace.load_file(SPIN).to_dict()
     data["camera"]["resolution"] = 80  # frames of about a second: the kill finds one running
@@ -266,7 +289,7 @@ def test_ctrl_c_in_the_terminal_stops_a_cli_render_on_a_local_cluster_cleanly(tm
         assert started.wait(240), "".join(seen)
         # Ctrl-C in a terminal signals the whole process group: the CLI and its workers.
         os.killpg(p.pid, signal.SIGINT)
-        assert p.wait(60) == 130
+        assert p.wait(60) == 130, "".join(seen)[-4000:]
     finally:
         if p.poll() is None:
             os.killpg(p.pid, signal.SIGKILL)

@@ -144,11 +144,13 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _dask_address(text: str) -> str:
-    if text != "local" and "://" not in text:
+    from .cluster import check_address
+
+    try:
+        return check_address(text)
+    except ValueError as e:
         raise argparse.ArgumentTypeError(
-            f"expected 'local' or a scheduler address tcp://HOST:PORT, got {text!r} (give "
-            "--dask after the scene, or write --dask local)")
-    return text
+            f"{e} (give --dask after the scene, or write --dask local)") from None
 
 
 def _add_output_options(p: argparse.ArgumentParser) -> None:

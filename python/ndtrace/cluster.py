@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import signal
 import threading
 import time
 import uuid
@@ -64,11 +65,23 @@ def _check_client(client: Any):
     return distributed
 
 
+def check_address(address: str) -> str:
+    """``address`` if it is ``local`` or a scheduler address (``SCHEME://…``); else ValueError."""
+    if address != "local" and "://" not in address:
+        raise ValueError("expected 'local' or a scheduler address tcp://HOST:PORT, got "
+                         f"{address!r}")
+    return address
+
+
 @contextlib.contextmanager
 def connect(address: str) -> Iterator[Any]:
     """A Dask client for the CLI's ``--dask ADDRESS``: ``local`` starts a LocalCluster on this
     machine (worker processes; it and its HTTP server bound to 127.0.0.1; closed on exit), anything
     else is a scheduler address (``tcp://HOST:PORT``)."""
+    try:
+        check_address(address)
+    except ValueError as e:
+        raise ValueError(f"--dask {address}: {e}") from None
     distributed = distributed_module()
     if address == "local":
         cluster = distributed.LocalCluster(host="127.0.0.1", dashboard_address="127.0.0.1:0",
@@ -81,9 +94,6 @@ def connect(address: str) -> Iterator[Any]:
         finally:
             cluster.close()
         return
-    if "://" not in address:
-        raise ValueError(f"--dask {address}: expected 'local' or a scheduler address "
-                         "tcp://HOST:PORT")
     try:
         client = distributed.Client(address, timeout="10s")
     except OSError as e:
@@ -147,6 +157,65 @@ def _trace_slab(scene, cells: tuple[int, int], threads: int | None, cancel: str)
     return {k: out[k] for k in _FIELDS}
 
 
+#: How often the client looks for finished tasks (and raises a Ctrl-C it held back).
+_POLL_SECONDS = 0.05
+
+#: The signals whose Python handlers :class:`_Signals` watches (the CLI's Ctrl-C, SIGTERM and
+#: SIGHUP all raise KeyboardInterrupt).
+_WATCHED = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+
+class _Signals:
+    """While in use (``with``), the Python handlers of the signals in ``_WATCHED`` can be held
+    back: a handler's exception raised inside ``with held():`` is kept and raised by the next
+    ``check()`` instead.
+
+    A signal's handler runs wherever the main thread is, and a KeyboardInterrupt raised inside
+    a finalizer — a Dask future's ``__del__``, run as a finished future is let go — is printed
+    as "Exception ignored" with a traceback and dropped: Ctrl-C would go unnoticed and the
+    render run to its end. So the code that lets futures go runs ``held()``. Outside the main
+    thread (no handlers run there) this changes nothing."""
+
+    def __init__(self) -> None:
+        self.kept: list[BaseException] = []
+        self.holding = False
+        self.previous: dict = {}
+
+    def __enter__(self) -> "_Signals":
+        if threading.current_thread() is threading.main_thread():
+            self.previous = {s: h for s in _WATCHED if callable(h := signal.getsignal(s))}
+        for s, handler in self.previous.items():
+            signal.signal(s, self._keeping(handler))
+        return self
+
+    def __exit__(self, *_exc) -> None:
+        for s, handler in self.previous.items():
+            signal.signal(s, handler)
+
+    def _keeping(self, handler):
+        def handle(signum, frame):
+            try:
+                handler(signum, frame)
+            except BaseException as e:
+                self.kept.append(e)
+                if not self.holding:
+                    raise
+        return handle
+
+    @contextlib.contextmanager
+    def held(self) -> Iterator[None]:
+        self.holding = True
+        try:
+            yield
+        finally:
+            self.holding = False
+
+    def check(self) -> None:
+        """Raises the first exception a handler raised here, if any."""
+        if self.kept:
+            raise self.kept[0]
+
+
 def _gather(client, scatter: Callable[[], Any], submit: Callable[[Any, int, str], Any],
             weights: list[int], window: int | None,
             progress: Callable[[int, int], object] | None, what: str,
@@ -165,35 +234,47 @@ def _gather(client, scatter: Callable[[], Any], submit: Callable[[Any, int, str]
     count = len(weights)
     running: dict[str, tuple[int, Any]] = {}
     try:
-        shared = scatter()
-        queue = distributed.as_completed()
-        following = 0
+        with _Signals() as signals:
+            shared = scatter()
+            queue = distributed.as_completed()
+            following = 0
 
-        def more() -> None:
-            nonlocal following
-            while following < count and (window is None or len(running) < window):
-                future = submit(shared, following, cancel)
-                running[future.key] = (following, future)
-                queue.add(future)
-                following += 1
+            def more() -> None:
+                nonlocal following
+                while following < count and (window is None or len(running) < window):
+                    future = submit(shared, following, cancel)
+                    running[future.key] = (following, future)
+                    queue.add(future)
+                    following += 1
 
-        total, done = sum(weights), 0
-        more()
-        if progress is not None:
-            progress(0, total)
-        for future in queue:
-            i, _ = running.pop(future.key)
-            try:
-                value = future.result()
-            except Exception as e:
-                e.add_note(f"(raised on a Dask worker, {what} {i})")
-                raise
-            del future
+            total, done = sum(weights), 0
             more()
-            on_result(i, value)
-            done += weights[i]
             if progress is not None:
-                progress(done, total)
+                progress(0, total)
+            while not queue.is_empty():
+                signals.check()
+                if not queue.has_ready():
+                    time.sleep(_POLL_SECONDS)
+                    continue
+                # Finished futures are let go here (their __del__ runs): Ctrl-C waits.
+                with signals.held():
+                    future = next(queue)
+                    i = running.pop(future.key)[0]
+                    try:
+                        value = future.result()
+                    except Exception as e:
+                        e.add_note(f"(raised on a Dask worker, {what} {i})")
+                        raise
+                    finally:
+                        del future
+                    more()
+                signals.check()
+                on_result(i, value)
+                done += weights[i]
+                if progress is not None:
+                    progress(done, total)
+            with signals.held():
+                del queue, shared
     except BaseException:
         with contextlib.suppress(Exception):
             event.set()

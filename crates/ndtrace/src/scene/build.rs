@@ -91,7 +91,8 @@ pub struct Object<const N: usize> {
 }
 
 /// A scene ready to trace: world-space objects, the BVH over all their simplices (built once),
-/// lights and the camera.
+/// lights and the camera. Cloning is cheap: the objects, the BVH and the edge cache are shared.
+#[derive(Clone)]
 pub struct Scene<const N: usize> {
     /// The camera.
     pub camera: Camera<N>,
@@ -124,6 +125,19 @@ pub struct Scene<const N: usize> {
     pub(crate) edge_cache: Arc<crate::edges::EdgeCache>,
 }
 
+/// The `[composite]` options `composite` checked against the retina of `camera`.
+fn check_composite<const N: usize>(
+    composite: Option<&crate::composite::CompositeOptions>,
+    camera: &Camera<N>,
+) -> R<()> {
+    match composite {
+        Some(c) => c
+            .validate_for(&camera.numpy_shape(), true)
+            .map_err(|e| PathError::new(format!("composite.{}", e.key), e.message)),
+        None => Ok(()),
+    }
+}
+
 impl<const N: usize> Scene<N> {
     /// This scene seen by the camera `camera` (with the `[composite]` options `composite`
     /// checked against its retina): what building the description with that camera gives,
@@ -136,24 +150,10 @@ impl<const N: usize> Scene<N> {
         composite: Option<&crate::composite::CompositeOptions>,
     ) -> R<Scene<N>> {
         let camera = self::camera::<N>(camera, self.render.samples)?;
-        if let Some(c) = composite {
-            c.validate_for(&camera.numpy_shape(), true)
-                .map_err(|e| PathError::new(format!("composite.{}", e.key), e.message))?;
-        }
+        check_composite(composite, &camera)?;
         Ok(Scene {
             camera,
-            objects: Arc::clone(&self.objects),
-            lights: self.lights.clone(),
-            ambient: self.ambient,
-            background: self.background,
-            render: self.render.clone(),
-            bvh: Arc::clone(&self.bvh),
-            normal_slots: Arc::clone(&self.normal_slots),
-            offsets: self.offsets.clone(),
-            skipped_degenerate: self.skipped_degenerate,
-            extent: self.extent,
-            warnings: self.warnings.clone(),
-            edge_cache: Arc::clone(&self.edge_cache),
+            ..self.clone()
         })
     }
 
@@ -793,10 +793,7 @@ pub(crate) fn build_using<const N: usize>(
     if let Some(a) = &desc.animation {
         super::animation::check::<N>(a, desc.objects.len())?;
     }
-    if let Some(c) = &desc.composite {
-        c.validate_for(&camera.numpy_shape(), true)
-            .map_err(|e| PathError::new(format!("composite.{}", e.key), e.message))?;
-    }
+    check_composite(desc.composite.as_ref(), &camera)?;
     // 2. Meshes in world space. A transform that reverses handedness (det < 0) would turn
     //    outward normals inward (normals are pseudotensors), so such simplices are reordered to
     //    keep their orientation.
