@@ -216,6 +216,8 @@ def test_five_d_retina_constant_along_the_hidden_axis_reduces_to_one_slice():
         (dict(mode="slices", axis=3), "axis"),
         (dict(axis=-1), "axis"),
         (dict(step=0), "step"),
+        (dict(rays_per_cell=65), "rays_per_cell"),
+        (dict(rays_per_cell=-1), "rays_per_cell"),
         (dict(zoom=0), "zoom"),
         (dict(threads=0), "threads"),
         (dict(strip_height=0), "strip_height"),

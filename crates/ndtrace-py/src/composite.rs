@@ -194,7 +194,17 @@ fn composite<'py>(
     })?;
     let (h, w) = (images[0].height, images[0].width);
     let count = images.len();
-    let flat: Vec<f32> = images.into_iter().flat_map(|i| i.rgba).collect();
+    let flat: Vec<f32> = if count == 1 {
+        images
+            .into_iter()
+            .next()
+            .map(|i| i.rgba)
+            .unwrap_or_default()
+    } else {
+        let mut flat = Vec::with_capacity(count * h * w * 4);
+        images.iter().for_each(|i| flat.extend_from_slice(&i.rgba));
+        flat
+    };
     let array = PyArray1::from_vec(py, flat);
     if frames == 0 {
         Ok(array.reshape([h, w, 4])?.into_any())

@@ -20,10 +20,13 @@
 //!   contour enhancement of illustrative volume rendering), so the outline of the projected
 //!   body shows without a fog in front of it.
 //!
-//! For N = 4 the marcher samples two grids: the cells' (dilated) colour with their smoothed
-//! coverage, and the coverage gradient with the crease and occlusion opacity. For N ≥ 5 the
-//! cues are classified in the (N−1)-D retina into a premultiplied volume (silhouettes as a
-//! view-independent shell) which the recursive stages then project as any other.
+//! For N = 4 the cues are found once per retina (in the box of its hit cells grown by four
+//! cells, their reach): the cells' (dilated) colour with their smoothed coverage, the coverage
+//! gradient and the crease and occlusion opacity; each view classifies them into a
+//! premultiplied volume, the silhouettes from its own view rays. For N ≥ 5 the creases and
+//! occlusion contours are classified in the (N−1)-D retina into a premultiplied volume which
+//! the recursive stages project, with the retina's coverage beside it; the silhouettes are
+//! then those of the projected coverage, seen per view as for N = 4.
 
 use super::{CompositeOptions, Volume};
 use crate::composite::volume::Camera3;
@@ -66,7 +69,18 @@ pub struct RetinaCamera {
 /// Per-cell structure flags.
 const CREASE: u8 = 1;
 const OCCLUSION: u8 = 2;
-const SILHOUETTE: u8 = 4;
+
+/// The part of a retina the cues are found in: cells `origin .. origin + shape` (numpy order)
+/// of a retina of `full` cells, beyond which no cell is hit within [`CUE_REACH`] cells.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Window<'a> {
+    pub(super) origin: &'a [usize],
+    pub(super) full: &'a [usize],
+}
+
+/// How far from a hit cell the cues reach: its neighbours' flags, smoothed, their coverage
+/// gradient and the trilinear samples of the view (one cell each), and an empty cell beyond.
+pub(super) const CUE_REACH: usize = 4;
 
 /// The flags of every cell: comparisons with its 2m axis neighbours.
 fn flags(
@@ -74,6 +88,7 @@ fn flags(
     depth: &[f32],
     normal: Option<&[f32]>,
     shape: &[usize],
+    window: Window<'_>,
     camera: Option<&RetinaCamera>,
     crease_angle: f64,
 ) -> Vec<u8> {
@@ -105,10 +120,10 @@ fn flags(
                 let mut u = [0.0f64; 8];
                 for a in (0..m).rev() {
                     let r = shape[a];
-                    let idx = rest % r;
+                    let idx = rest % r + window.origin[a];
                     rest /= r;
                     let k = m - 1 - a;
-                    let half = r as f64 / 2.0;
+                    let half = window.full[a] as f64 / 2.0;
                     u[k] = if k == 1 {
                         (half - idx as f64 - 0.5) * cam.cell
                     } else {
@@ -155,7 +170,7 @@ fn flags(
                 };
                 let hj = hit(j);
                 if hi != hj {
-                    *f |= SILHOUETTE;
+                    // A silhouette: found from the coverage gradient, per view.
                     continue;
                 }
                 if !hi {
@@ -194,42 +209,54 @@ fn flags(
 /// One pass of the separable [1, 2, 1]/4 filter along every axis of `shape`, over `width`
 /// channels per cell (zero outside).
 fn smooth(values: &[f32], width: usize, shape: &[usize]) -> Vec<f32> {
-    let m = shape.len();
     let mut cur = values.to_vec();
-    let mut stride = 1usize;
-    for a in (0..m).rev() {
-        let r = shape[a];
-        let src = cur;
-        let mut dst = vec![0f32; src.len()];
-        dst.par_chunks_mut(4096 * width)
-            .enumerate()
-            .for_each(|(chunk, out)| {
-                for (j, v) in out.iter_mut().enumerate() {
-                    let e = chunk * 4096 * width + j;
-                    let (cell, ch) = (e / width, e % width);
-                    let pos = (cell / stride) % r;
-                    let mut s = 2.0 * src[e];
-                    if pos > 0 {
-                        s += src[(cell - stride) * width + ch];
-                    }
-                    if pos + 1 < r {
-                        s += src[(cell + stride) * width + ch];
-                    }
-                    *v = s * 0.25;
+    let mut dst = vec![0f32; values.len()];
+    // Along axis a the data is `outer` runs of r rows of `inner` contiguous numbers.
+    let mut inner = width;
+    for &r in shape.iter().rev() {
+        let filter = |src: &[f32], out: &mut [f32], pos: usize| {
+            // One row of `inner` numbers at `pos` from the rows of its run (`src`).
+            let here = &src[pos * inner..][..inner];
+            let prev = (pos > 0).then(|| &src[(pos - 1) * inner..][..inner]);
+            let next = (pos + 1 < r).then(|| &src[(pos + 1) * inner..][..inner]);
+            for (j, v) in out.iter_mut().enumerate() {
+                let mut s = 2.0 * here[j];
+                if let Some(p) = prev {
+                    s += p[j];
                 }
+                if let Some(n) = next {
+                    s += n[j];
+                }
+                *v = s * 0.25;
+            }
+        };
+        if inner >= 64 {
+            // Long rows: one unit of parallel work per row.
+            dst.par_chunks_mut(inner).enumerate().for_each(|(k, out)| {
+                let (run, pos) = (k / r, k % r);
+                filter(&cur[run * r * inner..][..r * inner], out, pos);
             });
-        cur = dst;
-        stride *= r;
+        } else {
+            // Short rows (the innermost axes): one unit per run.
+            dst.par_chunks_mut(r * inner)
+                .zip(cur.par_chunks(r * inner))
+                .for_each(|(out, src)| {
+                    for (pos, row) in out.chunks_mut(inner).enumerate() {
+                        filter(src, row, pos);
+                    }
+                });
+        }
+        std::mem::swap(&mut cur, &mut dst);
+        inner *= r;
     }
     cur
 }
 
 /// The smoothed cues of a retina: per cell the dilated straight colour and smoothed coverage
-/// (`color`, 4 floats), the crease + occlusion opacity and the smoothed silhouette shell.
+/// (`color`, 4 floats) and the crease + occlusion opacity.
 struct Cues {
     color: Vec<[f32; 4]>,
     structure: Vec<f32>,
-    shell: Vec<f32>,
 }
 
 fn cues(
@@ -237,21 +264,17 @@ fn cues(
     depth: &[f32],
     normal: Option<&[f32]>,
     shape: &[usize],
+    window: Window<'_>,
     camera: Option<&RetinaCamera>,
     o: &CompositeOptions,
 ) -> Cues {
     let cells: usize = shape.iter().product();
-    let f = flags(rgba, depth, normal, shape, camera, o.crease_angle);
+    let f = flags(rgba, depth, normal, shape, window, camera, o.crease_angle);
     let marks: Vec<f32> = f
-        .iter()
-        .flat_map(|&b| {
-            [
-                f32::from(b & (CREASE | OCCLUSION) != 0),
-                f32::from(b & SILHOUETTE != 0),
-            ]
-        })
+        .par_iter()
+        .map(|&b| f32::from(b & (CREASE | OCCLUSION) != 0))
         .collect();
-    let marks = smooth(&marks, 2, shape);
+    let marks = smooth(&marks, 1, shape);
     let blurred = smooth(rgba, 4, shape);
     let opacity = o.opacity as f32;
     let mut color = vec![[0f32; 4]; cells];
@@ -267,17 +290,11 @@ fn cues(
             *c = [src[0] / w, src[1] / w, src[2] / w, b[3] * opacity];
         }
     });
-    let structure = (0..cells)
-        .map(|i| (marks[2 * i] * 1.6).min(1.0) * CREASE_OPACITY)
+    let structure = marks
+        .par_iter()
+        .map(|&m| (m * 1.6).min(1.0) * CREASE_OPACITY)
         .collect();
-    let shell = (0..cells)
-        .map(|i| (marks[2 * i + 1] * 1.6).min(1.0))
-        .collect();
-    Cues {
-        color,
-        structure,
-        shell,
-    }
+    Cues { color, structure }
 }
 
 /// Lightens (dark background) or darkens (light background) a colour by `k` ∈ [0, 1]: the ink
@@ -296,7 +313,12 @@ pub fn dark(bg: [f64; 3]) -> bool {
     0.2126 * bg[0] + 0.7152 * bg[1] + 0.0722 * bg[2] < 0.3
 }
 
-/// For N ≥ 5: the retina classified into a premultiplied volume for the recursive stages.
+/// For N ≥ 5: the retina classified into a premultiplied volume for the recursive stages —
+/// the cells' interior, creases and occlusion contours, inked — and its coverage (alpha only),
+/// which the stages project too: the silhouettes are found in the projected 3D volume and
+/// seen per view ([`Cues3::projected`]), as for N = 4. (A silhouette shell classified in the
+/// (N−1)-D retina would be projected through the stages into a fog over the whole body and
+/// a halo around it.)
 pub(super) fn classify(
     rgba: &[f32],
     depth: &[f32],
@@ -304,79 +326,165 @@ pub(super) fn classify(
     shape: &[usize],
     camera: Option<&RetinaCamera>,
     o: &CompositeOptions,
-) -> Vec<[f32; 4]> {
-    let c = cues(rgba, depth, normal, shape, camera, o);
+) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+    let origin = vec![0; shape.len()];
+    let whole = Window {
+        origin: &origin,
+        full: shape,
+    };
+    let c = cues(rgba, depth, normal, shape, whole, camera, o);
     let dark_bg = dark(o.background);
-    (0..c.color.len())
+    let classified = (0..c.color.len())
         .into_par_iter()
         .map(|i| {
             let [r, g, b, cov] = c.color[i];
-            let feature = c.structure[i].max(0.5 * c.shell[i]);
+            let feature = c.structure[i];
             let a = (INTERIOR_OPACITY * cov).max(feature).min(1.0);
             let k = (feature / 0.3).min(1.0);
             let col = ink([r, g, b], k, dark_bg);
             [col[0] * a, col[1] * a, col[2] * a, a]
         })
-        .collect()
+        .collect();
+    let coverage = (0..c.color.len())
+        .into_par_iter()
+        .map(|i| [0.0, 0.0, 0.0, rgba[i * 4 + 3].clamp(0.0, 1.0)])
+        .collect();
+    (classified, coverage)
 }
 
-/// The view-independent cues of a 3D retina (N = 4), classified per view by
-/// [`Cues3::classify`].
+/// The view-independent cues of a 3D volume — a 3D retina (N = 4) or, for N ≥ 5, the
+/// stages' projection of the classified retina ([`Cues3::projected`]) — classified per view
+/// by [`Cues3::classify`].
 pub(super) struct Cues3 {
     /// Numpy order (slices, rows, columns).
     shape: [usize; 3],
-    /// Straight colour and (smoothed, opacity-scaled) coverage per cell.
+    /// Cell coordinates (column, row, slice) of the first cell in the retina.
+    origin: [usize; 3],
+    /// Straight colour and opacity-scaled coverage per cell (smoothed for N = 4; for N ≥ 5
+    /// the projected coverage as the stages made it, the silhouettes' gate).
     color: Vec<[f32; 4]>,
     /// Coverage gradient in cell coordinates (column, row, slice) and the crease + occlusion
-    /// opacity.
+    /// opacity (0 for N ≥ 5, where `interior` holds them).
     cues: Vec<[f32; 4]>,
+    /// Opacity of the cell's interior (with creases, for N ≥ 5: already classified).
+    interior: Vec<f32>,
     dark_bg: bool,
 }
 
 impl Cues3 {
-    /// From a 3D retina (`shape` of length 3, numpy order).
+    /// From (the `window` of) a 3D retina (`shape` of length 3, numpy order).
     pub(super) fn new(
         rgba: &[f32],
         depth: &[f32],
         normal: Option<&[f32]>,
         shape: &[usize],
+        window: Window<'_>,
         camera: Option<&RetinaCamera>,
         o: &CompositeOptions,
     ) -> Self {
-        let c = cues(rgba, depth, normal, shape, camera, o);
-        let (nz, ny, nx) = (shape[0], shape[1], shape[2]);
-        let cov = |x: usize, y: usize, z: usize| c.color[x + nx * (y + ny * z)][3];
-        let cues: Vec<[f32; 4]> = (0..c.color.len())
+        let c = cues(rgba, depth, normal, shape, window, camera, o);
+        let interior = c
+            .color
+            .par_iter()
+            .map(|v| INTERIOR_OPACITY * v[3])
+            .collect();
+        let origin = [window.origin[2], window.origin[1], window.origin[0]];
+        Self::with_gradient(shape, origin, c.color, c.structure, interior, o)
+    }
+
+    /// For N ≥ 5: from the 3D volume the stages made of the classified retina
+    /// ([`classify`]), `vol`, and of its coverage, `coverage` (alpha only): the straight
+    /// colours and opacities of `vol` (dilated by one smoothing pass into the cells around
+    /// them), with the silhouettes of the projected coverage, smoothed.
+    pub(super) fn projected(vol: &Volume, coverage: &Volume, o: &CompositeOptions) -> Self {
+        let shape = &vol.shape;
+        let flat: Vec<f32> = vol.cells.iter().flatten().copied().collect();
+        let blurred = smooth(&flat, 4, shape);
+        let raw: Vec<f32> = coverage.cells.iter().map(|c| c[3]).collect();
+        let cov = smooth(&raw, 1, shape);
+        let opacity = o.opacity as f32;
+        let color = (0..vol.cells.len())
             .into_par_iter()
             .map(|i| {
-                let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
-                // Central differences in cell coordinates, one-sided at the faces.
-                let d = |lo: f32, hi: f32, span: usize| (hi - lo) / span as f32;
-                let axis = |v: usize, r: usize, at: &dyn Fn(usize) -> f32| {
-                    let (a, b) = (v.saturating_sub(1), (v + 1).min(r - 1));
-                    if b > a {
-                        d(at(a), at(b), b - a)
-                    } else {
-                        0.0
-                    }
+                let [r, g, b, a] = vol.cells[i];
+                let (src, w) = if a > 1e-6 {
+                    ([r, g, b], a)
+                } else {
+                    (
+                        [blurred[i * 4], blurred[i * 4 + 1], blurred[i * 4 + 2]],
+                        blurred[i * 4 + 3],
+                    )
                 };
-                let gx = axis(x, nx, &|v| cov(v, y, z));
-                let gy = axis(y, ny, &|v| cov(x, v, z));
-                let gz = axis(z, nz, &|v| cov(x, y, v));
-                [gx, gy, gz, c.structure[i]]
+                if w > 1e-6 {
+                    [src[0] / w, src[1] / w, src[2] / w, cov[i] * opacity]
+                } else {
+                    [0.0, 0.0, 0.0, cov[i] * opacity]
+                }
             })
             .collect();
+        let interior = vol.cells.iter().map(|c| c[3]).collect();
+        let structure = vec![0.0; vol.cells.len()];
+        let mut cues = Self::with_gradient(shape, [0; 3], color, structure, interior, o);
+        // The silhouettes' gate is the coverage before smoothing: the smoothed coverage's
+        // gradient reaches a cell beyond the body, which would glow around it (by a cell
+        // of the coarse projected volume: a wide halo).
+        for (c, r) in cues.color.iter_mut().zip(raw) {
+            c[3] = r * opacity;
+        }
+        cues
+    }
+
+    /// The cues with the coverage gradient of `color`'s coverage.
+    fn with_gradient(
+        shape: &[usize],
+        origin: [usize; 3],
+        color: Vec<[f32; 4]>,
+        structure: Vec<f32>,
+        interior: Vec<f32>,
+        o: &CompositeOptions,
+    ) -> Self {
+        let (nz, ny, nx) = (shape[0], shape[1], shape[2]);
+        // Central differences in cell coordinates, one-sided at the faces.
+        let cov = |i: usize| color[i][3];
+        let axis = |v: usize, r: usize, i: usize, stride: usize| {
+            let (a, b) = (v.saturating_sub(1), (v + 1).min(r - 1));
+            if b > a {
+                (cov(i + (b - v) * stride) - cov(i - (v - a) * stride)) / (b - a) as f32
+            } else {
+                0.0
+            }
+        };
+        let mut cues = vec![[0f32; 4]; color.len()];
+        cues.par_chunks_mut(nx).enumerate().for_each(|(row, out)| {
+            let (y, z) = (row % ny, row / ny);
+            for (x, g) in out.iter_mut().enumerate() {
+                let i = row * nx + x;
+                *g = [
+                    axis(x, nx, i, 1),
+                    axis(y, ny, i, nx),
+                    axis(z, nz, i, nx * ny),
+                    structure[i],
+                ];
+            }
+        });
         Cues3 {
             shape: [nz, ny, nx],
-            color: c.color,
+            origin,
+            color,
             cues,
+            interior,
             dark_bg: dark(o.background),
         }
     }
 
-    /// The premultiplied volume seen by `cam`: every cell's interior, crease and silhouette
-    /// opacity, the silhouette's from the angle between the coverage gradient and the view ray
-    /// through the cell's centre.
+    /// The cell coordinates (column, row, slice) of the first cell in the retina.
+    pub(super) fn origin(&self) -> [usize; 3] {
+        self.origin
+    }
+
+    /// The premultiplied volume seen by `cam` (the window's cells): every cell's interior,
+    /// crease and silhouette opacity, the silhouette's from the angle between the coverage
+    /// gradient and the view ray through the cell's centre.
     pub(super) fn classify(&self, cam: &Camera3) -> Volume {
         let [_, ny, nx] = self.shape;
         let cells = (0..self.color.len())
@@ -387,10 +495,11 @@ impl Cues3 {
                 let gm = (gx * gx + gy * gy + gz * gz).sqrt();
                 let sil = if gm > 1e-4 {
                     let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
+                    let [ox, oy, oz] = self.origin;
                     let v = cam.view_direction(DVec3::new(
-                        x as f64 + 0.5,
-                        y as f64 + 0.5,
-                        z as f64 + 0.5,
+                        (ox + x) as f64 + 0.5,
+                        (oy + y) as f64 + 0.5,
+                        (oz + z) as f64 + 0.5,
                     ));
                     let facing =
                         ((gx as f64 * v.x + gy as f64 * v.y + gz as f64 * v.z) as f32 / gm).abs();
@@ -402,7 +511,7 @@ impl Cues3 {
                     0.0
                 };
                 let feature = (structure * CREASE_GAIN).max(sil);
-                let a = (INTERIOR_OPACITY * cov).max(feature).min(1.0);
+                let a = self.interior[i].max(feature).min(1.0);
                 let k = (feature / 0.3).min(1.0);
                 let col = ink([r, g, b], k, self.dark_bg);
                 [col[0] * a, col[1] * a, col[2] * a, a]
@@ -411,6 +520,67 @@ impl Cues3 {
         Volume {
             shape: self.shape.to_vec(),
             cells,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::smooth;
+
+    /// The filter written out cell by cell: the index arithmetic of every neighbour spelled
+    /// out, summed in the same order (centre twice, then the lower, then the upper neighbour).
+    fn smooth_cell_by_cell(values: &[f32], width: usize, shape: &[usize]) -> Vec<f32> {
+        let mut cur = values.to_vec();
+        let mut stride = 1usize;
+        for &r in shape.iter().rev() {
+            let mut dst = vec![0f32; cur.len()];
+            for (e, v) in dst.iter_mut().enumerate() {
+                let (cell, ch) = (e / width, e % width);
+                let pos = (cell / stride) % r;
+                let mut s = 2.0 * cur[e];
+                if pos > 0 {
+                    s += cur[(cell - stride) * width + ch];
+                }
+                if pos + 1 < r {
+                    s += cur[(cell + stride) * width + ch];
+                }
+                *v = s * 0.25;
+            }
+            cur = dst;
+            stride *= r;
+        }
+        cur
+    }
+
+    #[test]
+    fn smoothing_is_the_filter_written_cell_by_cell_bit_for_bit() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.3
+        };
+        for shape in [
+            vec![7usize],
+            vec![1, 5],
+            vec![3, 1, 4],
+            vec![9, 17, 13],
+            vec![2, 3, 70, 5],
+            vec![40, 33, 2],
+        ] {
+            for width in [1usize, 2, 4] {
+                let cells: usize = shape.iter().product();
+                let values: Vec<f32> = (0..cells * width).map(|_| next()).collect();
+                let fast = smooth(&values, width, &shape);
+                let slow = smooth_cell_by_cell(&values, width, &shape);
+                assert_eq!(
+                    fast.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                    slow.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                    "shape {shape:?}, width {width}"
+                );
+            }
         }
     }
 }

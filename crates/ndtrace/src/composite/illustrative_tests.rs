@@ -1,5 +1,6 @@
 //! Tests of the illustrative mode, the edge overlay, the stages' point map and `fit`.
 
+use super::illustrative::{Cues3, RetinaCamera};
 use super::overlay::edge_color;
 use super::stages::stage_point;
 use super::*;
@@ -362,4 +363,182 @@ fn illustrative_pictures_do_not_depend_on_the_thread_count() {
             .install(|| composite_retina(&rgba, Some(&depth), &shape, &extras, &o).unwrap())
     };
     assert_eq!(run(1), run(3));
+}
+
+#[test]
+fn cues_found_in_the_window_around_the_hit_cells_are_those_of_the_whole_retina() {
+    // A 4D-lit ball off-centre in a 26 × 30 × 34 retina: normals, depths and hits vary, and a
+    // perspective retina camera places the hit points (occlusion contours).
+    let shape = [26usize, 30, 34];
+    let (c, r) = ([13.0, 15.0, 20.0], 6.5);
+    let cells: usize = shape.iter().product();
+    let (mut rgba, mut depth, mut normal) = (
+        vec![0f32; cells * 4],
+        vec![f32::INFINITY; cells],
+        vec![0f32; cells * 4],
+    );
+    for z in 0..shape[0] {
+        for y in 0..shape[1] {
+            for x in 0..shape[2] {
+                let p = [z as f64 - c[0], y as f64 - c[1], x as f64 - c[2]];
+                let d2 = p.iter().map(|v| v * v).sum::<f64>();
+                if d2 > r * r {
+                    continue;
+                }
+                let i = (z * shape[1] + y) * shape[2] + x;
+                let w = (r * r - d2).sqrt();
+                let len = (d2 + w * w).sqrt();
+                let nrm = [p[2] / len, -p[1] / len, p[0] / len, -w / len];
+                normal[i * 4..i * 4 + 4].copy_from_slice(&nrm.map(|v| v as f32));
+                let a = if d2 > (r - 1.0) * (r - 1.0) { 0.6 } else { 1.0 };
+                rgba[i * 4..i * 4 + 4].copy_from_slice(&[0.7 * a, 0.5 * a, 0.2 * a, a]);
+                depth[i] = (6.0 - w * 0.05 + if x > 21 { 1.5 } else { 0.0 }) as f32;
+            }
+        }
+    }
+    let camera = RetinaCamera {
+        orientation: (0..16)
+            .map(|k| if k % 5 == 0 { 1.0 } else { 0.0 })
+            .collect(),
+        cell: 0.02,
+        perspective: true,
+    };
+    let o = CompositeOptions {
+        background: [0.9, 0.9, 0.9],
+        ..options((40, 40))
+    };
+    let whole = Cues3::new(
+        &rgba,
+        &depth,
+        Some(&normal),
+        &shape,
+        illustrative::Window {
+            origin: &[0, 0, 0],
+            full: &shape,
+        },
+        Some(&camera),
+        &o,
+    );
+    // The window: the hit cells' box grown by the cues' reach.
+    let lo = [
+        (c[0] - r).floor() as usize - illustrative::CUE_REACH,
+        (c[1] - r).floor() as usize - illustrative::CUE_REACH,
+        (c[2] - r).floor() as usize - illustrative::CUE_REACH,
+    ];
+    let m: [usize; 3] = std::array::from_fn(|k| {
+        ((c[k] + r).ceil() as usize + 1 + illustrative::CUE_REACH).min(shape[k]) - lo[k]
+    });
+    assert!(
+        (0..3).all(|k| m[k] < shape[k]),
+        "the window must leave cells out: {m:?}"
+    );
+    let part = |data: &[f32], width: usize| -> Vec<f32> {
+        let mut out = vec![];
+        for z in lo[0]..lo[0] + m[0] {
+            for y in lo[1]..lo[1] + m[1] {
+                let row = (z * shape[1] + y) * shape[2] + lo[2];
+                out.extend_from_slice(&data[row * width..(row + m[2]) * width]);
+            }
+        }
+        out
+    };
+    let windowed = Cues3::new(
+        &part(&rgba, 4),
+        &part(&depth, 1),
+        Some(&part(&normal, 4)),
+        &m,
+        illustrative::Window {
+            origin: &lo,
+            full: &shape,
+        },
+        Some(&camera),
+        &o,
+    );
+    for (az, el, projection) in [
+        (30.0, 20.0, Projection::Perspective),
+        (-70.0, 5.0, Projection::Orthographic),
+    ] {
+        let view = CompositeOptions {
+            azimuth: az,
+            elevation: el,
+            projection,
+            ..o.clone()
+        };
+        let cam = Camera3::new([shape[2], shape[1], shape[0]], None, &view);
+        let a = whole.classify(&cam);
+        let b = windowed.classify(&cam);
+        let mut inside = 0;
+        for z in 0..shape[0] {
+            for y in 0..shape[1] {
+                for x in 0..shape[2] {
+                    let va = a.cells[(z * shape[1] + y) * shape[2] + x];
+                    let k = [z, y, x];
+                    if (0..3).all(|j| (lo[j]..lo[j] + m[j]).contains(&k[j])) {
+                        let vb = b.cells[((z - lo[0]) * m[1] + y - lo[1]) * m[2] + x - lo[2]];
+                        assert_eq!(va.map(f32::to_bits), vb.map(f32::to_bits), "cell {k:?}");
+                        inside += usize::from(va[3] > 0.0);
+                    } else {
+                        assert_eq!(va, [0.0; 4], "cell {k:?} outside the window");
+                    }
+                }
+            }
+        }
+        assert!(inside > 1000, "{inside} cells with opacity");
+    }
+}
+
+#[test]
+fn n5_silhouettes_outline_the_projected_body_without_fog_or_halo() {
+    // A cube of cells 4..12 of a 16³ retina, the same in slices 1..5 of the 6 of a 4D retina
+    // (N = 5): a 4D box, faces across the collapsed axis included. Through an orthographic
+    // stage, the 3D volume of a cube; seen face-on, the cube spans x ∈ [−½, ½] of the unit
+    // box, pixels 32 ± 64/(2√3)·½ of a 64² picture. (A silhouette shell classified in 4D
+    // covers the whole cube in slices 1 and 4, a fog once projected.)
+    let shape = [6usize, 16, 16, 16];
+    let inside = |i: usize| (4..12).contains(&i);
+    let mut rgba = Vec::new();
+    for s in 0..shape[0] {
+        for z in 0..16 {
+            for y in 0..16 {
+                for x in 0..16 {
+                    let body = (1..5).contains(&s) && inside(x) && inside(y) && inside(z);
+                    let a = if body { 1.0 } else { 0.0 };
+                    rgba.extend_from_slice(&[0.5 * a, 0.4 * a, 0.3 * a, a]);
+                }
+            }
+        }
+    }
+    let depth = vec![5.0f32; rgba.len() / 4];
+    let o = options((64, 64));
+    let img = composite_retina(&rgba, Some(&depth), &shape, &RetinaExtras::default(), &o).unwrap();
+    let row = 32;
+    let alphas: Vec<f32> = (0..64).map(|x| img.pixel(x, row)[3]).collect();
+    let half = 64.0 / (2.0 * 3f32.sqrt()) * 0.5;
+    let cell = 64.0 / (2.0 * 3f32.sqrt()) * 0.125;
+    // No halo: rays that pass more than a cell (the trilinear reach) from the cube see nothing.
+    for (x, &a) in alphas.iter().enumerate() {
+        if (x as f32 + 0.5 - 32.0).abs() > half + cell + 1.0 {
+            assert!(
+                a < 1e-6,
+                "pixel {x} outside the cube: alpha {a}: {alphas:?}"
+            );
+        }
+    }
+    // No fog: through the middle, the 8 cells' interior (each the stage's 4 slices of
+    // INTERIOR_OPACITY) and the two faces' faint silhouette, nothing more.
+    let slab = 1.0 - (1.0 - illustrative::INTERIOR_OPACITY).powi(4);
+    let body = 1.0 - (1.0 - slab).powi(8);
+    let faces = 1.0 - (1.0 - illustrative::SILHOUETTE_FACE).powi(2);
+    let centre = alphas[32];
+    assert!(
+        centre > body - 0.05 && centre < 1.0 - (1.0 - body) * (1.0 - faces) + 0.05,
+        "centre alpha {centre}, interior {body}, faces {faces}: {alphas:?}"
+    );
+    // The outline: where the sides are seen edge-on, far more opaque than the middle.
+    let left = alphas[..32].iter().copied().fold(0f32, f32::max);
+    let right = alphas[32..].iter().copied().fold(0f32, f32::max);
+    assert!(
+        left > centre + 0.08 && right > centre + 0.08,
+        "outline {left} / {right} vs centre {centre}: {alphas:?}"
+    );
 }

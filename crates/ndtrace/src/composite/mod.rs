@@ -38,8 +38,9 @@
 //! background the RGB channels are exactly C, so `(RGB, A)` is then a valid premultiplied
 //! image that can be composited over anything else.
 //!
-//! Work is split over output rows with rayon; every pixel depends only on the inputs and its
-//! own coordinates, so the picture is bit-identical whatever the number of threads.
+//! Work is split over output rows (and blocks of the ray lattice) with rayon; every pixel
+//! depends only on the inputs, its own coordinates and the pixels traced for its block, so the
+//! picture is bit-identical whatever the number of threads.
 
 mod aids;
 pub mod illustrative;

@@ -200,6 +200,13 @@ composite_options! {
         opacity: f64 = 1.0,
         /// Sample spacing of the volume mode, in cells (0.01 ..= 4). Default 0.5.
         step: f64 = 0.5,
+        /// For N ≥ 4 (volume, first-hit and illustrative views; mip traces every pixel):
+        /// rays are cast at most this many to a cell's width where the cells look smallest —
+        /// every s-th pixel, s = ⌊pixels per cell / rays_per_cell⌋ ≤ 16 — and the pixels
+        /// between them are traced where the picture changes and interpolated bilinearly
+        /// where it is smooth (see `composite::volume::render_view`). 0 traces a ray through
+        /// every pixel. In 0 ..= 64. Default 1.
+        rays_per_cell: usize = 1,
         /// Strength in [0, 1] of depth cueing; 0 turns it off (default). Every hit cell's
         /// colour is multiplied by `1 − s + s · tint(t)` where t ∈ [0, 1] is its depth
         /// (distance from the N-D eye, the `depth` array) normalized over the retina's finite
@@ -398,6 +405,7 @@ impl CompositeOptions {
             size: (w, h),
             opacity,
             step,
+            rays_per_cell,
             depth_cue,
             axis: _,
             background,
@@ -499,6 +507,12 @@ impl CompositeOptions {
                 format!("must be in [0.01, 4] cells, got {step}"),
             ));
         }
+        if *rays_per_cell > 64 {
+            return Err(bad(
+                "rays_per_cell",
+                format!("must be in 0 ..= 64 (0: a ray through every pixel), got {rays_per_cell}"),
+            ));
+        }
         let cue = finite("depth_cue", *depth_cue)?;
         if !(0.0..=1.0).contains(&cue) {
             return Err(bad("depth_cue", format!("must be in [0, 1], got {cue}")));
@@ -579,6 +593,7 @@ projection = "orthographic"
 size = [320, 200]
 opacity = 0.25
 step = 0.75
+rays_per_cell = 3
 depth_cue = 0.5
 axis = 2
 background = [0.1, 0.2, 0.3]
@@ -615,6 +630,7 @@ radius = 0.5
             size: (320, 200),
             opacity: 0.25,
             step: 0.75,
+            rays_per_cell: 3,
             depth_cue: 0.5,
             axis: 2,
             background: [0.1, 0.2, 0.3],

@@ -28,6 +28,9 @@ fn legacy() -> CompositeOptions {
     CompositeOptions {
         mode: CompositeMode::Volume,
         fit: false,
+        // A ray through every pixel: these tests check the rays' arithmetic, the lattice
+        // of `rays_per_cell` is tested against it.
+        rays_per_cell: 0,
         ..Default::default()
     }
 }
@@ -612,16 +615,17 @@ fn perspective_stage_maps_slice_zero_exactly_and_shrinks_far_slices() {
 }
 
 #[test]
-fn empty_space_skipping_changes_nothing() {
-    // Sparse random blobs; the same picture with every block marked occupied.
+fn empty_space_skipping_and_storing_only_the_occupied_part_change_nothing() {
+    // Sparse random blobs; the same picture, bit for bit, from the grid of every cell with every
+    // block marked occupied.
     let shape = [37usize, 29, 45];
     let mut r = rng(21);
     let centres: Vec<[f64; 3]> = (0..6)
         .map(|_| {
             [
-                r.random_range(0.0..37.0),
-                r.random_range(0.0..29.0),
-                r.random_range(0.0..45.0),
+                r.random_range(6.0..30.0),
+                r.random_range(5.0..23.0),
+                r.random_range(6.0..38.0),
             ]
         })
         .collect();
@@ -645,7 +649,12 @@ fn empty_space_skipping_changes_nothing() {
         grid.occupied.iter().any(|&b| !b),
         "the test needs empty blocks"
     );
-    let mut full = Grid::new(&vol);
+    let (lo, hi) = grid.stored_box();
+    assert!(
+        lo.min_element() > 0.0 || hi.x < 45.0 || hi.y < 29.0 || hi.z < 37.0,
+        "the test needs a part of the volume left out"
+    );
+    let mut full = Grid::whole(&vol);
     full.occupied.iter_mut().for_each(|b| *b = true);
     for (mode, az, el, projection) in [
         (CompositeMode::Volume, 30.0, 20.0, Projection::Perspective),
@@ -685,7 +694,11 @@ fn empty_space_skipping_changes_nothing() {
         let differ = a
             .chunks(4)
             .zip(b.chunks(4))
-            .filter(|(x, y)| x.iter().zip(y.iter()).any(|(u, v)| (u - v).abs() > 1e-6))
+            .filter(|(x, y)| {
+                x.iter()
+                    .zip(y.iter())
+                    .any(|(u, v)| u.to_bits() != v.to_bits())
+            })
             .count();
         assert!(differ == 0, "{mode:?} az {az}: {differ} pixels differ");
         assert!(a.chunks(4).filter(|p| p[3] > 0.0).count() > 100);
@@ -905,4 +918,206 @@ fn bad_input_is_a_clear_error() {
         ..legacy()
     };
     assert_eq!(err(&rgba5, None, &shape5, &o).0, "stages[0]");
+}
+
+#[test]
+fn pictures_traced_on_a_lattice_are_the_pictures_traced_at_every_pixel_within_a_level() {
+    // Bodies as a traced retina has them: balls covered inside, partly covered on their rims,
+    // coloured smoothly, in a small retina seen large, so that a cell spans many pixels and the
+    // lattice skips most of them; and random cells (sharp jumps from cell to cell), the worst
+    // case, at two rays per cell.
+    let shape = [24usize, 28, 32];
+    let balls = [
+        ([8.0, 10.0, 11.0], 6.0),
+        ([15.0, 17.0, 21.0], 7.5),
+        ([12.0, 20.0, 8.0], 3.0),
+    ];
+    let bodies = retina(&shape, |i| {
+        let cover = balls
+            .iter()
+            .map(|(c, r)| {
+                let d = (0..3)
+                    .map(|k| (i[k] as f64 + 0.5 - c[k]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                (r + 0.5 - d).clamp(0.0, 1.0)
+            })
+            .fold(0.0, f64::max) as f32;
+        let col = [
+            0.3 + i[2] as f32 * 0.02,
+            0.6 - i[1] as f32 * 0.01,
+            0.2 + i[0] as f32 * 0.015,
+        ];
+        [col[0] * cover, col[1] * cover, col[2] * cover, cover]
+    });
+    let random = random_retina(&[9, 11, 13], 31, false, false);
+    let srgb = |v: f32| v.max(0.0).sqrt();
+    for (mode, opacity, (cells, shape), projection, rays_per_cell, bound) in [
+        (
+            CompositeMode::Volume,
+            0.3,
+            (&bodies, [24, 28, 32]),
+            Projection::Perspective,
+            1,
+            0.03,
+        ),
+        (
+            CompositeMode::Volume,
+            1.0,
+            (&bodies, [24, 28, 32]),
+            Projection::Orthographic,
+            1,
+            0.06,
+        ),
+        (
+            CompositeMode::FirstHit,
+            1.0,
+            (&bodies, [24, 28, 32]),
+            Projection::Perspective,
+            1,
+            0.03,
+        ),
+        (
+            CompositeMode::Illustrative,
+            1.0,
+            (&bodies, [24, 28, 32]),
+            Projection::Perspective,
+            1,
+            0.03,
+        ),
+        (
+            CompositeMode::Volume,
+            0.4,
+            (&random, [9, 11, 13]),
+            Projection::Perspective,
+            2,
+            0.04,
+        ),
+        (
+            CompositeMode::Illustrative,
+            1.0,
+            (&random, [9, 11, 13]),
+            Projection::Perspective,
+            2,
+            0.03,
+        ),
+    ] {
+        let o = CompositeOptions {
+            mode,
+            opacity,
+            projection,
+            azimuth: 23.0,
+            elevation: 31.0,
+            size: (320, 240),
+            background: [0.2, 0.3, 0.4],
+            rays_per_cell,
+            ..Default::default()
+        };
+        let vol = Volume {
+            shape: shape.to_vec(),
+            cells: prepare(cells, None, shape.iter().product(), &o),
+        };
+        let grid = Grid::new(&vol);
+        let cam = volume::Camera3::new([shape[2], shape[1], shape[0]], grid.occupied_box(), &o);
+        // The spacing over the stored part of the prepared volume (what the volume and
+        // first-hit views render), and the least spacing any grid of this volume can have
+        // (the illustrative view renders a classified grid of its own, stored in a box of
+        // its own within the volume).
+        let s = volume::lattice_spacing(&cam, grid.stored_box(), o.rays_per_cell);
+        let least = volume::lattice_spacing(&cam, Grid::whole(&vol).stored_box(), o.rays_per_cell);
+        assert!(
+            least >= 3 && s >= least,
+            "{mode:?}: the lattice must skip pixels (spacing {least} … {s})"
+        );
+        let traced = composite(
+            cells,
+            None,
+            &shape,
+            &CompositeOptions {
+                rays_per_cell: 0,
+                ..o.clone()
+            },
+        )
+        .unwrap();
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| composite(cells, None, &shape, &o).unwrap())
+        };
+        let lattice = run(1);
+        assert_eq!(
+            lattice,
+            run(3),
+            "{mode:?}: the same picture on any number of threads"
+        );
+        // Lattice pixels are traced; the others differ by little, and rarely at all.
+        let (w, h) = o.size;
+        let (mut worst, mut off) = (0f32, 0usize);
+        for y in 0..h {
+            for x in 0..w {
+                let (a, b) = (lattice.pixel(x, y), traced.pixel(x, y));
+                if mode != CompositeMode::Illustrative && x % s == 0 && y % s == 0 {
+                    assert_eq!(a, b, "{mode:?}: lattice pixel ({x}, {y})");
+                }
+                // Colour as √RGB (about perceived lightness), alpha as it is.
+                let d = (0..3)
+                    .map(|k| (srgb(a[k]) - srgb(b[k])).abs())
+                    .fold((a[3] - b[3]).abs(), f32::max);
+                worst = worst.max(d);
+                off += usize::from(d > 2.0 / 255.0);
+            }
+        }
+        assert!(worst < bound, "{mode:?}: a pixel off by {worst}");
+        assert!(
+            off * 200 < w * h,
+            "{mode:?}: {off} pixels off by more than 2 levels"
+        );
+        assert!(
+            traced.rgba.chunks(4).filter(|p| p[3] > 0.02).count() > w * h / 20,
+            "{mode:?}: content"
+        );
+        // The half-opacity distances the edge overlay fades edges with: finite where the
+        // traced picture's are, and close to them.
+        if mode != CompositeMode::Illustrative {
+            let bg = [0.2, 0.3, 0.4];
+            let every = CompositeOptions {
+                rays_per_cell: 0,
+                ..o.clone()
+            };
+            let th = |o: &CompositeOptions| {
+                volume::render_view(&grid, &cam, mode, o, bg, true)
+                    .1
+                    .unwrap()
+            };
+            let (a, b) = (th(&o), th(&every));
+            let mut off = 0usize;
+            for (x, y) in a.iter().zip(&b) {
+                if x.is_finite() != y.is_finite() {
+                    off += 1;
+                } else if x.is_finite() {
+                    off += usize::from((x - y).abs() > 0.05 * y.abs().max(1.0));
+                }
+            }
+            assert!(
+                off * 200 < w * h,
+                "{mode:?}: {off} half-opacity distances off"
+            );
+        }
+    }
+    // A maximum-intensity picture is a mosaic of cells: traced at every pixel.
+    let o = CompositeOptions {
+        mode: CompositeMode::Mip,
+        size: (320, 240),
+        ..Default::default()
+    };
+    let every = CompositeOptions {
+        rays_per_cell: 0,
+        ..o.clone()
+    };
+    assert_eq!(
+        composite(&bodies, None, &shape, &o).unwrap(),
+        composite(&bodies, None, &shape, &every).unwrap()
+    );
 }

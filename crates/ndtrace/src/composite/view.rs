@@ -13,10 +13,10 @@ use glam::DVec3;
 
 /// What the views are rendered from.
 enum Source {
-    /// A premultiplied volume (volume, mip and first-hit modes; the illustrative mode for N ≥ 5,
-    /// classified before the stages).
+    /// A premultiplied volume (volume, mip and first-hit modes).
     Grid(Grid),
-    /// The illustrative cues of a 3D retina, classified per view.
+    /// The illustrative cues of a 3D retina (or, for N ≥ 5, of the stages' 3D volume),
+    /// classified per view.
     Cues(Cues3),
 }
 
@@ -91,7 +91,6 @@ impl View3 {
                     cut(&mut prepared, shape, c);
                 }
             }
-            let prepared: Vec<f32> = prepared.into_iter().flatten().collect();
             let hits: Vec<f32>;
             let depth = match depth {
                 Some(d) => d,
@@ -110,26 +109,57 @@ impl View3 {
             };
             let camera = extras.camera.as_ref();
             if shape.len() == 3 {
+                // The cues of the cells within their reach of the hit ones (the box of the
+                // occupied cells, grown): the same cues as over the whole retina.
+                let full = [shape[0], shape[1], shape[2]];
+                let (lo, m) = match frame {
+                    Some((a, b)) => {
+                        let lo: [usize; 3] = std::array::from_fn(|k| {
+                            (a[2 - k] as usize).saturating_sub(illustrative::CUE_REACH)
+                        });
+                        let m: [usize; 3] = std::array::from_fn(|k| {
+                            (b[2 - k] as usize + illustrative::CUE_REACH).min(full[k]) - lo[k]
+                        });
+                        (lo, m)
+                    }
+                    None => ([0; 3], full),
+                };
+                let prepared: Vec<f32> = window(&prepared, 1, full, lo, m)
+                    .into_iter()
+                    .flatten()
+                    .collect();
+                let depth = window(depth, 1, full, lo, m);
+                let normal = extras.normal.map(|nrm| window(nrm, 4, full, lo, m));
                 Source::Cues(Cues3::new(
                     &prepared,
-                    depth,
-                    extras.normal,
-                    shape,
+                    &depth,
+                    normal.as_deref(),
+                    &m,
+                    illustrative::Window {
+                        origin: &lo,
+                        full: &full,
+                    },
                     camera,
                     opts,
                 ))
             } else {
-                let classified =
+                let prepared: Vec<f32> = prepared.into_iter().flatten().collect();
+                let (classified, coverage) =
                     illustrative::classify(&prepared, depth, extras.normal, shape, camera, opts);
                 let mut vol = down_to_3d(Volume {
                     shape: shape.to_vec(),
                     cells: classified,
                 });
+                let mut coverage = down_to_3d(Volume {
+                    shape: shape.to_vec(),
+                    cells: coverage,
+                });
                 frame = box_of(&vol.shape, &vol.cells);
                 if let Some(c) = &opts.cutaway {
                     cut(&mut vol.cells, &vol.shape, c);
+                    cut(&mut coverage.cells, &coverage.shape, c);
                 }
-                Source::Grid(Grid::new(&vol))
+                Source::Cues(Cues3::projected(&vol, &coverage, opts))
             }
         } else {
             let mut vol = plain();
@@ -214,7 +244,7 @@ impl View3 {
         let grid = match &self.source {
             Source::Grid(g) => g,
             Source::Cues(c) => {
-                classified = Grid::new(&c.classify(&cam));
+                classified = Grid::placed(&c.classify(&cam), c.origin(), self.n);
                 &classified
             }
         };
@@ -225,6 +255,25 @@ impl View3 {
         }
         img
     }
+}
+
+/// The cells `lo .. lo + m` (numpy order, `width` values per cell) of a 3D array of `shape`
+/// cells.
+fn window<T: Copy>(
+    data: &[T],
+    width: usize,
+    shape: [usize; 3],
+    lo: [usize; 3],
+    m: [usize; 3],
+) -> Vec<T> {
+    let mut out = Vec::with_capacity(m.iter().product::<usize>() * width);
+    for z in lo[0]..lo[0] + m[0] {
+        for y in lo[1]..lo[1] + m[1] {
+            let row = (z * shape[1] + y) * shape[2] + lo[2];
+            out.extend_from_slice(&data[row * width..(row + m[2]) * width]);
+        }
+    }
+    out
 }
 
 /// The box, in cell coordinates, of the cells with alpha > 0 of a 3D volume in numpy order.

@@ -9,35 +9,79 @@ use rayon::prelude::*;
 const BLOCK: usize = 8;
 
 /// A 3D volume in cell coordinates p = (column, row, slice) ∈ [0, nx] × [0, ny] × [0, nz],
-/// stored with one extra cell on every side that repeats the edge cell, so that trilinear
+/// of which only the part around the cells with alpha > 0 is stored (every sample outside it
+/// is zero), with one extra cell on every side that repeats the edge cell, so that trilinear
 /// sampling clamped to the edge cells needs no per-axis clamping.
 pub(super) struct Grid {
+    /// The whole volume's cells: rays are clipped to [0, n], so the samples along a ray do not
+    /// depend on which part is stored.
     pub(super) n: [usize; 3],
-    /// (nx + 2) × (ny + 2) × (nz + 2) cells; cell (x, y, z) is at padded (x + 1, y + 1, z + 1).
+    /// The stored part: cells `lo .. lo + m`.
+    lo: [usize; 3],
+    m: [usize; 3],
+    /// `lo` as floats.
+    lo_f: [f32; 3],
+    /// (mx + 2) × (my + 2) × (mz + 2) cells; stored cell (x, y, z) is at padded (x + 1, y + 1,
+    /// z + 1).
     cells: Vec<Vec4>,
     /// Index strides of the padded y and z axes.
     sy: usize,
     sz: usize,
-    /// Upper clamp of padded sample coordinates, n + ½ (a ray is clipped to [0, n]).
+    /// Upper clamp of padded sample coordinates, m + ½.
     qmax: [f32; 3],
-    /// Per block: does any cell within one cell of the block have alpha > 0? Then every
-    /// trilinear sample at a point of an unmarked block is zero.
+    /// Per block of the stored part: does any cell within one cell of the block have alpha > 0?
+    /// Then every trilinear sample at a point of an unmarked block is zero.
     pub(super) occupied: Vec<bool>,
     blocks: [usize; 3],
 }
 
 impl Grid {
+    /// The grid of a 3D volume (numpy order), storing the box of its cells with alpha > 0
+    /// grown by one cell (so the stored part's faces are empty, and samples beyond them are
+    /// zero, as in the whole volume).
     pub(super) fn new(vol: &Volume) -> Self {
         let n = [vol.shape[2], vol.shape[1], vol.shape[0]];
-        let blocks = n.map(|r| r.div_ceil(BLOCK));
+        Self::placed(vol, [0; 3], n)
+    }
+
+    /// [`Grid::new`] of a volume that is the part of a larger one of `n` cells starting at cell
+    /// `origin` (cell coordinates); every cell of the larger one outside it has alpha 0.
+    pub(super) fn placed(vol: &Volume, origin: [usize; 3], n: [usize; 3]) -> Self {
+        let part = [vol.shape[2], vol.shape[1], vol.shape[0]];
+        let (lo, m) = match occupied_box(part, |x, y, z| {
+            vol.cells[x + part[0] * (y + part[1] * z)][3]
+        }) {
+            Some((a, b)) => {
+                let a = a.map(|v| (v as usize).saturating_sub(1));
+                let b: [usize; 3] = std::array::from_fn(|k| (b[k] as usize + 1).min(part[k]));
+                (a, std::array::from_fn(|k| b[k] - a[k]))
+            }
+            None => ([0; 3], [1; 3]),
+        };
+        Self::stored(vol, lo, m, origin, n)
+    }
+
+    /// The grid storing the cells `lo .. lo + m` of `vol` (a part of the larger volume of `n`
+    /// cells, at `origin`).
+    fn stored(
+        vol: &Volume,
+        lo: [usize; 3],
+        m: [usize; 3],
+        origin: [usize; 3],
+        n: [usize; 3],
+    ) -> Self {
+        let part = [vol.shape[2], vol.shape[1], vol.shape[0]];
+        let at = |x: usize, y: usize, z: usize| {
+            vol.cells[(lo[0] + x) + part[0] * ((lo[1] + y) + part[1] * (lo[2] + z))]
+        };
+        let blocks = m.map(|r| r.div_ceil(BLOCK));
         let mut occupied = vec![false; blocks[0] * blocks[1] * blocks[2]];
-        for z in 0..n[2] {
-            for y in 0..n[1] {
-                let row = &vol.cells[n[0] * (y + n[1] * z)..][..n[0]];
-                for (x, c) in row.iter().enumerate() {
-                    if c[3] > 0.0 {
+        for z in 0..m[2] {
+            for y in 0..m[1] {
+                for x in 0..m[0] {
+                    if at(x, y, z)[3] > 0.0 {
                         let r = |i: usize, k: usize| {
-                            (i.saturating_sub(1) / BLOCK)..=((i + 1).min(n[k] - 1) / BLOCK)
+                            (i.saturating_sub(1) / BLOCK)..=((i + 1).min(m[k] - 1) / BLOCK)
                         };
                         for bz in r(z, 2) {
                             for by in r(y, 1) {
@@ -50,39 +94,60 @@ impl Grid {
                 }
             }
         }
-        let (px, py, pz) = (n[0] + 2, n[1] + 2, n[2] + 2);
+        let (px, py, pz) = (m[0] + 2, m[1] + 2, m[2] + 2);
         let mut cells = vec![Vec4::ZERO; px * py * pz];
         cells
             .par_chunks_mut(px * py)
             .enumerate()
             .for_each(|(zp, slab)| {
-                let z = zp.clamp(1, n[2]) - 1;
+                let z = zp.clamp(1, m[2]) - 1;
                 for yp in 0..py {
-                    let y = yp.clamp(1, n[1]) - 1;
-                    let src = &vol.cells[n[0] * (y + n[1] * z)..][..n[0]];
+                    let y = yp.clamp(1, m[1]) - 1;
                     for xp in 0..px {
-                        slab[xp + px * yp] = Vec4::from_array(src[xp.clamp(1, n[0]) - 1]);
+                        slab[xp + px * yp] = Vec4::from_array(at(xp.clamp(1, m[0]) - 1, y, z));
                     }
                 }
             });
-        let qmax = n.map(|r| r as f32 + 0.5);
+        let lo: [usize; 3] = std::array::from_fn(|k| origin[k] + lo[k]);
         Grid {
             n,
+            lo,
+            m,
+            lo_f: lo.map(|v| v as f32),
             cells,
             sy: px,
             sz: px * py,
-            qmax,
+            qmax: m.map(|r| r as f32 + 0.5),
             occupied,
             blocks,
         }
     }
 
+    /// The box of the stored part, in cell coordinates of the whole volume.
+    pub(super) fn stored_box(&self) -> (DVec3, DVec3) {
+        let lo = DVec3::new(self.lo[0] as f64, self.lo[1] as f64, self.lo[2] as f64);
+        (
+            lo,
+            lo + DVec3::new(self.m[0] as f64, self.m[1] as f64, self.m[2] as f64),
+        )
+    }
+
+    /// The grid storing every cell of `vol` (what [`Grid::new`] stores a part of).
+    #[cfg(test)]
+    pub(super) fn whole(vol: &Volume) -> Self {
+        let n = [vol.shape[2], vol.shape[1], vol.shape[0]];
+        Self::stored(vol, [0; 3], n, [0; 3], n)
+    }
+
     /// The bounding box, in cell coordinates, of the cells with alpha > 0 (`None` if none).
     #[cfg(test)]
     pub(super) fn occupied_box(&self) -> Option<([f64; 3], [f64; 3])> {
-        occupied_box(self.n, |x, y, z| self.cell(x, y, z)[3])
+        let (lo, hi) = occupied_box(self.m, |x, y, z| self.cell(x, y, z)[3])?;
+        let at = |v: [f64; 3]| std::array::from_fn(|k| v[k] + self.lo[k] as f64);
+        Some((at(lo), at(hi)))
     }
 
+    /// Stored cell (x, y, z) (counted from `lo`).
     #[inline(always)]
     fn cell(&self, x: usize, y: usize, z: usize) -> [f32; 4] {
         self.cells[(x + 1) + self.sy * (y + 1) + self.sz * (z + 1)].to_array()
@@ -94,7 +159,9 @@ impl Grid {
         // Padded coordinates: the centre of cell i is at i + 1.5, so the lower of the two
         // cells around p is ⌊p + ½⌋ (padded) and the fraction is the rest.
         let q = |k: usize| {
-            let v = p[k] + 0.5;
+            // p + ½ first, then the stored part's origin (an integer, so exactly): the same
+            // cells and fractions as in the whole volume.
+            let v = (p[k] + 0.5) - self.lo_f[k];
             if v > 0.0 {
                 if v < self.qmax[k] {
                     v
@@ -129,9 +196,18 @@ impl Grid {
         t1: f64,
         mut seg: impl FnMut(f64, f64) -> bool,
     ) {
+        // The part of [t0, t1] in the stored part, walked in its coordinates.
+        let lo = DVec3::new(self.lo[0] as f64, self.lo[1] as f64, self.lo[2] as f64);
+        let Some((a, b)) = clip_box(o - lo, d, self.m, false) else {
+            return;
+        };
+        let (t0, t1) = (t0.max(a), t1.min(b));
+        if !(t1 > t0) {
+            return;
+        }
         let mut run: Option<f64> = None;
         let mut stopped = false;
-        walk_cells(o, d, t0, t1, BLOCK as f64, self.blocks, |c, t_in| {
+        walk_cells(o - lo, d, t0, t1, BLOCK as f64, self.blocks, |c, t_in| {
             let b = c[0] + self.blocks[0] * (c[1] + self.blocks[1] * c[2]);
             match (self.occupied[b], run) {
                 (true, None) => run = Some(t_in),
@@ -359,6 +435,14 @@ pub(super) fn render_3d(
 /// pixel the distance along the view direction at which the opacity reached ½ (the volume
 /// mode; the surface for first-hit; infinite if never), which the edge overlay uses to fade
 /// edges behind dense content.
+///
+/// Rays are cast through the pixels of a lattice every s pixels ([`lattice_spacing`]: at most
+/// `rays_per_cell` rays to a cell where cells look smallest, s ≤ 16), and each s × s block
+/// between four lattice pixels is filled by bilinear interpolation of its corners where the
+/// picture is smooth there ([`smooth_block`], then its traced middle pixel), else split into
+/// quarters at traced side and middle pixels, recursively, down to single pixels. Every
+/// decision depends only on pixels traced for the block itself, so the picture is the same
+/// for any number of threads; with s = 1 every pixel is traced.
 pub(super) fn render_view(
     grid: &Grid,
     cam: &Camera3,
@@ -369,36 +453,321 @@ pub(super) fn render_view(
 ) -> (Vec<f32>, Option<Vec<f32>>) {
     let (w, h) = o.size;
     let step = o.step;
+    let iso = FIRST_HIT_ALPHA * (o.opacity as f32).min(1.0);
+    // The picture's RGBA over `bg` at pixel (px, py), and its half-opacity distance.
+    let pixel = |px: usize, py: usize| -> ([f32; 4], f32) {
+        let (org, dir, fwd_only) = cam.ray(px, py);
+        let (v, th) = match clip_box(org, dir, grid.n, fwd_only) {
+            None => ([0.0; 4], f32::INFINITY),
+            Some((t0, t1)) => match mode {
+                CompositeMode::Volume => march(grid, org, dir, t0, t1, step),
+                CompositeMode::Mip => (mip(grid, org, dir, t0, t1), f32::INFINITY),
+                _ => first_hit(grid, org, dir, t0, t1, step, iso),
+            },
+        };
+        // As a distance along the view direction, as the overlay measures.
+        (over(v, bg), th * dir.dot(cam.fwd) as f32)
+    };
     let mut img = vec![0f32; w * h * 4];
     let mut halves = vec![f32::INFINITY; w * h];
-    let iso = FIRST_HIT_ALPHA * (o.opacity as f32).min(1.0);
-    img.par_chunks_mut(w * 4 * TILE)
-        .zip(halves.par_chunks_mut(w * TILE))
-        .enumerate()
-        .for_each(|(band, (rows, band_halves))| {
-            let nrows = rows.len() / (w * 4);
-            for tx in (0..w).step_by(TILE) {
-                for r in 0..nrows {
-                    let py = band * TILE + r;
-                    for px in tx..(tx + TILE).min(w) {
-                        let (org, dir, fwd_only) = cam.ray(px, py);
-                        let (v, th) = match clip_box(org, dir, grid.n, fwd_only) {
-                            None => ([0.0; 4], f32::INFINITY),
-                            Some((t0, t1)) => match mode {
-                                CompositeMode::Volume => march(grid, org, dir, t0, t1, step),
-                                CompositeMode::Mip => (mip(grid, org, dir, t0, t1), f32::INFINITY),
-                                _ => first_hit(grid, org, dir, t0, t1, step, iso),
-                            },
-                        };
-                        let i = (r * w + px) * 4;
-                        rows[i..i + 4].copy_from_slice(&over(v, bg));
-                        // As a distance along the view direction, as the overlay measures.
-                        band_halves[r * w + px] = th * dir.dot(cam.fwd) as f32;
+    // A maximum-intensity picture is a mosaic of the cells' colours, nothing to interpolate.
+    let s = match mode {
+        CompositeMode::Mip => 1,
+        _ => lattice_spacing(cam, grid.stored_box(), o.rays_per_cell),
+    };
+    if s == 1 {
+        img.par_chunks_mut(w * 4 * TILE)
+            .zip(halves.par_chunks_mut(w * TILE))
+            .enumerate()
+            .for_each(|(band, (rows, band_halves))| {
+                let nrows = rows.len() / (w * 4);
+                for tx in (0..w).step_by(TILE) {
+                    for r in 0..nrows {
+                        for px in tx..(tx + TILE).min(w) {
+                            let (v, th) = pixel(px, band * TILE + r);
+                            rows[(r * w + px) * 4..][..4].copy_from_slice(&v);
+                            band_halves[r * w + px] = th;
+                        }
                     }
                 }
+            });
+        return (img, half.then_some(halves));
+    }
+    // 1. The lattice: pixels 0, s, 2s, … and the last one on each axis.
+    let stops = |len: usize| -> Vec<usize> {
+        let mut v: Vec<usize> = (0..len).step_by(s).collect();
+        if *v.last().unwrap() != len - 1 {
+            v.push(len - 1);
+        }
+        v
+    };
+    let (xs, ys) = (stops(w), stops(h));
+    let lattice: Vec<([f32; 4], f32)> = ys
+        .par_iter()
+        .flat_map_iter(|&py| xs.iter().map(move |&px| (px, py)))
+        .map(|(px, py)| pixel(px, py))
+        .collect();
+    let at = |i: usize, j: usize| &lattice[j * xs.len() + i];
+    // 2. The blocks, one band of them (image rows ys[j] .. ys[j + 1], the last band with its
+    //    closing row) per unit of parallel work.
+    let mut bands: Vec<(usize, &mut [f32], &mut [f32])> = Vec::with_capacity(ys.len());
+    let (mut img_rest, mut half_rest) = (&mut img[..], &mut halves[..]);
+    for j in 0..ys.len().saturating_sub(1) {
+        let rows = if j + 2 == ys.len() {
+            h - ys[j]
+        } else {
+            ys[j + 1] - ys[j]
+        };
+        let (a, b) = std::mem::take(&mut img_rest).split_at_mut(rows * w * 4);
+        let (c, d) = std::mem::take(&mut half_rest).split_at_mut(rows * w);
+        bands.push((j, a, c));
+        (img_rest, half_rest) = (b, d);
+    }
+    if ys.len() == 1 {
+        // A picture one pixel high: the lattice row is the picture.
+        bands.push((0, img_rest, half_rest));
+    }
+    bands.into_par_iter().for_each(|(j, rows, band_halves)| {
+        let y0 = ys[j];
+        let nrows = rows.len() / (w * 4);
+        let mut put = |px: usize, py: usize, (v, th): ([f32; 4], f32)| {
+            let r = py - y0;
+            rows[(r * w + px) * 4..][..4].copy_from_slice(&v);
+            band_halves[r * w + px] = th;
+        };
+        if ys.len() == 1 || xs.len() == 1 {
+            for py in y0..y0 + nrows {
+                for px in 0..w {
+                    put(px, py, pixel(px, py));
+                }
             }
-        });
+            return;
+        }
+        for i in 0..xs.len() - 1 {
+            let (x0, x1) = (xs[i], xs[i + 1]);
+            let y1 = ys[j + 1];
+            let block = Block {
+                x: [x0, x1],
+                y: [y0, y1],
+                corners: [*at(i, j), *at(i + 1, j), *at(i, j + 1), *at(i + 1, j + 1)],
+            };
+            // The block's pixels: up to x1 and y1, and x1 (y1) itself in the last column (row).
+            let own = [if i + 2 == xs.len() { x1 + 1 } else { x1 }, y0 + nrows];
+            let lattice_smooth = smooth_block(&lattice, xs.len(), ys.len(), i, j, half);
+            block.render(lattice_smooth, own, half, &pixel, &mut put);
+        }
+    });
     (img, half.then_some(halves))
+}
+
+/// A block of the picture between four traced pixels (its corners): x0 y0, x1 y0, x0 y1, x1 y1.
+struct Block {
+    x: [usize; 2],
+    y: [usize; 2],
+    corners: [([f32; 4], f32); 4],
+}
+
+impl Block {
+    /// Puts the pixels of the block below `own` (exclusive ends, x then y): interpolated when
+    /// the block is smooth (`smooth`, and its traced middle pixel agrees with its interpolation
+    /// within [`SMOOTH_MIDDLE`]), else split at its middle into four blocks, each rendered
+    /// so, down to blocks whose every pixel is a corner.
+    fn render(
+        &self,
+        smooth: bool,
+        own: [usize; 2],
+        half: bool,
+        pixel: &impl Fn(usize, usize) -> ([f32; 4], f32),
+        put: &mut impl FnMut(usize, usize, ([f32; 4], f32)),
+    ) {
+        let ([x0, x1], [y0, y1]) = (self.x, self.y);
+        let c = &self.corners;
+        let (xm, ym) = ((x0 + x1) / 2, (y0 + y1) / 2);
+        if xm == x0 && ym == y0 {
+            // No pixel inside: the corners (those the block owns) are the block.
+            for (k, (px, py)) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)]
+                .into_iter()
+                .enumerate()
+            {
+                if px < own[0] && py < own[1] {
+                    put(px, py, c[k]);
+                }
+            }
+            return;
+        }
+        let fraction = |v: usize, a: usize, b: usize| {
+            if b > a {
+                (v - a) as f32 / (b - a) as f32
+            } else {
+                0.0
+            }
+        };
+        let mid = pixel(xm, ym);
+        let smooth = smooth
+            && one_kind_of_distance(c.iter(), half)
+            && close(
+                &mid,
+                &bilinear(c, fraction(xm, x0, x1), fraction(ym, y0, y1)),
+                half,
+            );
+        if smooth {
+            for py in y0..own[1] {
+                let fy = fraction(py, y0, y1);
+                for px in x0..own[0] {
+                    put(px, py, bilinear(c, fraction(px, x0, x1), fy));
+                }
+            }
+            return;
+        }
+        // The four quarters, with the pixels at the middles of the block's sides.
+        let top = pixel(xm, y0);
+        let bottom = pixel(xm, y1);
+        let left = pixel(x0, ym);
+        let right = pixel(x1, ym);
+        let quarters = [
+            ([x0, xm], [y0, ym], [c[0], top, left, mid]),
+            ([xm, x1], [y0, ym], [top, c[1], mid, right]),
+            ([x0, xm], [ym, y1], [left, mid, c[2], bottom]),
+            ([xm, x1], [ym, y1], [mid, right, bottom, c[3]]),
+        ];
+        for (x, y, corners) in quarters {
+            // A quarter owns up to the next quarter, or what the block owns.
+            let own_q = [
+                if x[1] == x1 { own[0] } else { x[1] },
+                if y[1] == y1 { own[1] } else { y[1] },
+            ];
+            if x[0] >= own_q[0] || y[0] >= own_q[1] {
+                continue;
+            }
+            Block { x, y, corners }.render(true, own_q, half, pixel, put);
+        }
+    }
+}
+
+/// The lattice spacing s ≥ 1 of [`render_view`] for at most `rays_per_cell` rays across a cell
+/// where the cells of the box `(lo, hi)` (cell coordinates: the part of the volume that is not
+/// empty) look smallest, at its corner farthest from a perspective eye; 1 when `rays_per_cell`
+/// is 0.
+pub(super) fn lattice_spacing(
+    cam: &Camera3,
+    (lo, hi): (DVec3, DVec3),
+    rays_per_cell: usize,
+) -> usize {
+    if rays_per_cell == 0 {
+        return 1;
+    }
+    let far = if cam.ortho {
+        1.0
+    } else {
+        (0..8)
+            .map(|c: usize| {
+                let pick = |bit: usize, k: usize| if c >> bit & 1 == 0 { lo[k] } else { hi[k] };
+                (DVec3::new(pick(0, 0), pick(1, 1), pick(2, 2)) - cam.eye).length()
+            })
+            .fold(0.0, f64::max)
+    };
+    // Pixels across one cell at that distance.
+    let pixels = 1.0 / (cam.pixel * far);
+    ((pixels / rays_per_cell as f64).floor() as usize).clamp(1, MAX_LATTICE_SPACING)
+}
+
+/// Largest lattice spacing of [`render_view`], in pixels.
+const MAX_LATTICE_SPACING: usize = 16;
+
+/// Largest second difference, across three neighbouring lattice pixels, of a channel of a
+/// block's corners (colour as √RGB, which follows perceived lightness; alpha as it is) for
+/// the block to be interpolated: bilinear interpolation then errs by about an eighth of it.
+const SMOOTH_SECOND_DIFFERENCE: f32 = 0.02;
+
+/// Whether block (i, j) of a `cols` × `rows` lattice (row-major) is smooth enough to
+/// interpolate: at each of its four corners, along both axes, the second differences of
+/// every channel over the corner's lattice neighbours stay under
+/// [`SMOOTH_SECOND_DIFFERENCE`], and (with `half`) its corners' half-opacity distances are
+/// all finite or all infinite.
+fn smooth_block(
+    lattice: &[([f32; 4], f32)],
+    cols: usize,
+    rows: usize,
+    i: usize,
+    j: usize,
+    half: bool,
+) -> bool {
+    let at = |i: usize, j: usize| &lattice[j * cols + i];
+    let corners = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)];
+    if !one_kind_of_distance(corners.iter().map(|&(a, b)| at(a, b)), half) {
+        return false;
+    }
+    let enc = |v: &[f32; 4]| {
+        [
+            v[0].max(0.0).sqrt(),
+            v[1].max(0.0).sqrt(),
+            v[2].max(0.0).sqrt(),
+            v[3],
+        ]
+    };
+    let second = |a: &([f32; 4], f32), b: &([f32; 4], f32), c: &([f32; 4], f32)| {
+        let (a, b, c) = (enc(&a.0), enc(&b.0), enc(&c.0));
+        (0..4).all(|k| (a[k] - 2.0 * b[k] + c[k]).abs() <= SMOOTH_SECOND_DIFFERENCE)
+    };
+    corners.iter().all(|&(a, b)| {
+        let along_x = a == 0 || a + 1 == cols || second(at(a - 1, b), at(a, b), at(a + 1, b));
+        let along_y = b == 0 || b + 1 == rows || second(at(a, b - 1), at(a, b), at(a, b + 1));
+        along_x && along_y
+    })
+}
+
+/// Largest difference, in a channel (colour as √RGB, alpha as it is), between a block's
+/// traced middle pixel and its interpolation for the block to be interpolated: about two
+/// levels of an 8-bit sRGB picture at mid-grey.
+const SMOOTH_MIDDLE: f32 = 0.008;
+
+/// Whether the traced pixel `a` and its interpolation `b` agree within [`SMOOTH_MIDDLE`] (and,
+/// with `half`, their half-opacity distances are both finite or both infinite).
+/// Whether the pixels' half-opacity distances are all finite or all infinite (always, when
+/// they are not wanted): a block mixing them holds a silhouette of the edge overlay's depth
+/// and is not interpolated.
+fn one_kind_of_distance<'a>(
+    mut pixels: impl Iterator<Item = &'a ([f32; 4], f32)>,
+    half: bool,
+) -> bool {
+    if !half {
+        return true;
+    }
+    match pixels.next() {
+        Some(first) => {
+            let finite = first.1.is_finite();
+            pixels.all(|p| p.1.is_finite() == finite)
+        }
+        None => true,
+    }
+}
+
+fn close(a: &([f32; 4], f32), b: &([f32; 4], f32), half: bool) -> bool {
+    let enc = |v: f32, k: usize| if k < 3 { v.max(0.0).sqrt() } else { v };
+    (!half || a.1.is_finite() == b.1.is_finite())
+        && (0..4).all(|k| (enc(a.0[k], k) - enc(b.0[k], k)).abs() <= SMOOTH_MIDDLE)
+}
+
+/// Bilinear interpolation of the corners (x0 y0, x1 y0, x0 y1, x1 y1) at fractions (fx, fy);
+/// the half-opacity distance is interpolated when all four are finite.
+#[inline]
+fn bilinear(c: &[([f32; 4], f32); 4], fx: f32, fy: f32) -> ([f32; 4], f32) {
+    let w = [
+        (1.0 - fx) * (1.0 - fy),
+        fx * (1.0 - fy),
+        (1.0 - fx) * fy,
+        fx * fy,
+    ];
+    let mut v = [0f32; 4];
+    for (k, out) in v.iter_mut().enumerate() {
+        *out = w[0] * c[0].0[k] + w[1] * c[1].0[k] + w[2] * c[2].0[k] + w[3] * c[3].0[k];
+    }
+    let th = if c.iter().all(|c| c.1.is_finite()) {
+        w[0] * c[0].1 + w[1] * c[1].1 + w[2] * c[2].1 + w[3] * c[3].1
+    } else {
+        f32::INFINITY
+    };
+    (v, th)
 }
 
 /// Volume mode: emission–absorption at the midpoints t_j = t0 + (j + ½)·step of the ⌊L/step⌋
@@ -434,6 +803,10 @@ fn march(grid: &Grid, o: DVec3, d: DVec3, t0: f64, t1: f64, step: f64) -> ([f32;
     };
     grid.occupied_runs(o, d, t0, t1, |ta, tb| {
         let (j0, j1) = (first(ta), if tb >= t1 { n } else { first(tb) });
+        // The run's samples accumulate into local copies (kept in registers: the captured
+        // `acc` would be read and written through memory at every sample).
+        let (mut a, mut th) = (acc, t_half);
+        let mut stop = false;
         for j in j0..j1 {
             if j < whole {
                 let jf = j as i32 as f32;
@@ -442,23 +815,25 @@ fn march(grid: &Grid, o: DVec3, d: DVec3, t0: f64, t1: f64, step: f64) -> ([f32;
                     start[1] + jf * delta[1],
                     start[2] + jf * delta[2],
                 ];
-                acc.add(grid.sample(p), stepf);
+                a.add(grid.sample(p), stepf);
             } else {
                 let p = o + d * t_last;
-                acc.add(grid.sample([p.x as f32, p.y as f32, p.z as f32]), remf);
+                a.add(grid.sample([p.x as f32, p.y as f32, p.z as f32]), remf);
             }
-            if t_half.is_infinite() && acc.trans <= 0.5 {
-                t_half = if j < whole {
+            if th.is_infinite() && a.trans <= 0.5 {
+                th = if j < whole {
                     (t0 + (j as f64 + 0.5) * step) as f32
                 } else {
                     t_last as f32
                 };
             }
-            if acc.done() {
-                return true;
+            if a.done() {
+                stop = true;
+                break;
             }
         }
-        false
+        (acc, t_half) = (a, th);
+        stop
     });
     (acc.rgba(), t_half)
 }
@@ -472,7 +847,8 @@ fn traverse(
     t1: f64,
     mut visit: impl FnMut([f32; 4]) -> bool,
 ) {
-    walk_cells(o, d, t0, t1, 1.0, grid.n, |c, _| {
+    let lo = DVec3::new(grid.lo[0] as f64, grid.lo[1] as f64, grid.lo[2] as f64);
+    walk_cells(o - lo, d, t0, t1, 1.0, grid.m, |c, _| {
         visit(grid.cell(c[0], c[1], c[2]))
     });
 }
