@@ -697,16 +697,8 @@ fn smooth_block(
     if !one_kind_of_distance(corners.iter().map(|&(a, b)| at(a, b)), half) {
         return false;
     }
-    let enc = |v: &[f32; 4]| {
-        [
-            v[0].max(0.0).sqrt(),
-            v[1].max(0.0).sqrt(),
-            v[2].max(0.0).sqrt(),
-            v[3],
-        ]
-    };
     let second = |a: &([f32; 4], f32), b: &([f32; 4], f32), c: &([f32; 4], f32)| {
-        let (a, b, c) = (enc(&a.0), enc(&b.0), enc(&c.0));
+        let (a, b, c) = (perceptual(&a.0), perceptual(&b.0), perceptual(&c.0));
         (0..4).all(|k| (a[k] - 2.0 * b[k] + c[k]).abs() <= SMOOTH_SECOND_DIFFERENCE)
     };
     corners.iter().all(|&(a, b)| {
@@ -743,9 +735,21 @@ fn one_kind_of_distance<'a>(
 }
 
 fn close(a: &([f32; 4], f32), b: &([f32; 4], f32), half: bool) -> bool {
-    let enc = |v: f32, k: usize| if k < 3 { v.max(0.0).sqrt() } else { v };
+    let (pa, pb) = (perceptual(&a.0), perceptual(&b.0));
     (!half || a.1.is_finite() == b.1.is_finite())
-        && (0..4).all(|k| (enc(a.0[k], k) - enc(b.0[k], k)).abs() <= SMOOTH_MIDDLE)
+        && (0..4).all(|k| (pa[k] - pb[k]).abs() <= SMOOTH_MIDDLE)
+}
+
+/// A pixel's channels as the smoothness tests compare them: colour as √RGB (about perceived
+/// lightness), alpha as it is.
+#[inline]
+fn perceptual(v: &[f32; 4]) -> [f32; 4] {
+    [
+        v[0].max(0.0).sqrt(),
+        v[1].max(0.0).sqrt(),
+        v[2].max(0.0).sqrt(),
+        v[3],
+    ]
 }
 
 /// Bilinear interpolation of the corners (x0 y0, x1 y0, x0 y1, x1 y1) at fractions (fx, fy);
