@@ -314,22 +314,22 @@ def test_the_rolling_example_ends_turned_in_the_controller_plane():
     assert m[1, 0] < -0.3, "counterclockwise loop: the object turns y toward x (against the loop)"
 
 
-def test_frames_of_a_camera_animation_reuse_the_bvh_and_equal_frames_built_anew():
-    anim = scene4({"frames": 3, "target": "camera", "center": [0.1, 0, 0, 0.2],
+@pytest.mark.parametrize("target", ["camera", "objects", [0]])
+def test_frames_that_reuse_the_bvh_equal_frames_built_anew(target):
+    # A camera animation shares the scene's BVH; one that moves objects refits it.
+    anim = scene4({"frames": 3, "target": target, "center": [0.1, 0, 0, 0.2],
                    "sweep": {"plane": [0, 3], "degrees": [0, 60]}}, res=12)
     for k in range(3):
+        reused = anim.compiled().reused_frame(k)
+        assert reused is not None
         shared = frame_scene(anim, k)
         built = ndtrace.load_dict(anim.compiled().animation_frame(k))
         assert shared == built
         a, b = retina(shared), retina(built)
         for name in ("rgba", "depth", "normal", "object_id", "primitive_id"):
             assert np.array_equal(getattr(a, name).view(np.uint8), getattr(b, name).view(np.uint8)), name
-        # The feature edges the frames share (found once) are seen as the new build sees its own.
+        # The feature edges of the frames are seen as the new build sees its own.
         edges = shared.compiled().retina_edges(20.0)
         assert len(edges) > 0
         assert np.array_equal(edges, built.compiled().retina_edges(20.0))
         assert np.array_equal(ndtrace.composite(a, size=(48, 48)), ndtrace.composite(b, size=(48, 48)))
-    # Objects that move are built frame by frame.
-    objects = scene4({"frames": 2, "sweep": {"plane": [0, 3], "degrees": [0, 60]}})
-    assert objects.compiled().camera_frame(0) is None
-    assert anim.compiled().camera_frame(0) is not None

@@ -53,14 +53,15 @@ def _table(scene: Scene, animation: dict | None, frames: int | None) -> Scene:
 
 
 def frame_scene(scene: Scene, k: int) -> Scene:
-    """Frame ``k`` (0-based) of the scene's animation, as a still :class:`Scene`. When the
-    animation moves only the camera, the frame shares the scene's built objects and BVH (no
-    rebuild); otherwise it is built from the frame's description."""
+    """Frame ``k`` (0-based) of the scene's animation, as a still :class:`Scene`, without a
+    rebuild of the BVH: when the animation moves the camera the frame shares the scene's built
+    objects and BVH, when it moves objects the BVH is refitted to them; a frame the refit
+    refuses (or whose objects are read from files) is built from its description."""
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < 2**32:
         raise ValueError(f"k: expected a frame index ≥ 0, got {k!r}")
     compiled = scene.compiled()
-    # An animation of the camera reuses the scene's objects and BVH (the same bits as a build).
-    shared = compiled.camera_frame(int(k))
+    # The same bits as a build of the frame's description.
+    shared = compiled.reused_frame(int(k))
     if shared is not None:
         return Scene._from_compiled(shared, scene._base)
     return load_dict(compiled.animation_frame(int(k)), base=scene._base)

@@ -158,12 +158,13 @@ impl CompiledScene {
         crate::arrays::to_dict(py, &frame)
     }
 
-    /// Frame `k` of an animation that moves only the camera, as a scene sharing this one's
-    /// objects and BVH (bit for bit the frame's description built anew); `None` when the
-    /// animation moves objects (build `animation_frame(k)` then).
-    fn camera_frame(&self, k: u32) -> PyResult<Option<CompiledScene>> {
-        let frame = guarded("camera_frame", || {
-            scene::camera_frame(&self.desc, &self.scene, k, "<scene>").transpose()
+    /// Frame `k` of the animation without a build (bit for bit the frame's description built
+    /// anew): sharing this scene's objects and BVH when the camera moves, the BVH refitted to
+    /// the moved objects when objects move; `None` when that is refused (build
+    /// `animation_frame(k)` then).
+    fn reused_frame(&self, k: u32) -> PyResult<Option<CompiledScene>> {
+        let frame = guarded("reused_frame", || {
+            scene::reused_frame(&self.desc, &self.scene, k, "<scene>").transpose()
         })?;
         Ok(frame.map(|(desc, scene)| CompiledScene { desc, scene }))
     }

@@ -1,7 +1,8 @@
 //! The SAH build of the binary tree (binned, parallel, deterministic) and the public
 //! constructors of [`Bvh`], which collapse it into the wide tree (see `collapse`).
 
-use super::collapse::{id_ranges, wide_tree};
+use super::cell::{CellGeometry, FlatCell};
+use super::collapse::{id_ranges, wide_tree, CELL_MARK};
 use super::simplex::{simplex_bounds, Bounds, PreparedSimplex};
 use super::tree::{f32_down, f32_up, half_area, BinaryNode, Bvh, BLOCK_WIDTH, LEAF_TAG, MAX_LEAF};
 use crate::mesh::Mesh;
@@ -162,9 +163,11 @@ enum BuiltSubtree<const N: usize> {
     Split(BinaryNode<N>, Box<BuiltSubtree<N>>, Box<BuiltSubtree<N>>),
 }
 
-/// The build's one setting: nodes with at least `par_min` simplices are built in parallel.
+/// The build's settings: nodes with at least `par_min` simplices are built in parallel; inputs
+/// from `cells_from` on are flat cells, each a leaf of its own.
 struct Builder {
     par_min: usize,
+    cells_from: u32,
 }
 
 impl Builder {
@@ -228,7 +231,8 @@ impl Builder {
         depth: usize,
     ) -> Option<usize> {
         let n = refs.len();
-        if n <= MAX_LEAF {
+        // A flat cell is a leaf alone (it is one child reference).
+        if n == 1 || (n <= MAX_LEAF && refs.iter().all(|r| r.id < self.cells_from)) {
             return None;
         }
         let mut scale = [0.0f32; N];
@@ -385,10 +389,11 @@ fn flatten<const N: usize>(b: BuiltSubtree<N>, out: &mut Vec<BinaryNode<N>>) {
 /// The binary SAH tree over the simplices of the given bounds (each padded by [`BOX_PAD`] of
 /// its largest extent and rounded outward to f32), in depth-first order, and the leaf order
 /// (`idx[j]`: the input index of the j-th simplex in leaf order). Forks with rayon above
-/// `par_min` simplices.
+/// `par_min` simplices. Inputs from `cells_from` on are flat cells: each becomes a leaf alone.
 pub(super) fn binary_tree<const N: usize>(
     bounds: Vec<Bounds<N>>,
     par_min: usize,
+    cells_from: u32,
 ) -> (Vec<BinaryNode<N>>, Vec<u32>) {
     // Pad each box by BOX_PAD of its largest extent, so that it contains the BARY_SLACK band.
     let mut refs: Vec<Ref<N>> = bounds
@@ -407,6 +412,7 @@ pub(super) fn binary_tree<const N: usize>(
     drop(bounds);
     let builder = Builder {
         par_min: par_min.max(2),
+        cells_from,
     };
     let built = builder.build_par(&mut refs, 0, 0);
     let idx = refs.par_iter().map(|r| r.id).collect();
@@ -445,7 +451,7 @@ impl<const N: usize> Bvh<N> {
             prims.len() == ids.len(),
             "Bvh::build: prims, ids, bounds lengths differ"
         );
-        Self::build_from(ids, bounds, |i, _| prims[i], par_min)
+        Self::build_from(ids, bounds, Vec::new(), |i, _| prims[i], par_min)
     }
 
     /// [`Bvh::build`] without a list of prepared simplices: `prepare(id)` gives the one with
@@ -460,13 +466,33 @@ impl<const N: usize> Bvh<N> {
         bounds: Vec<([f64; N], [f64; N])>,
         prepare: impl Fn(u32) -> PreparedSimplex<N> + Sync,
     ) -> Self {
-        Self::build_from(ids, bounds, |_, id| prepare(id), PAR_MIN)
+        Self::build_from(ids, bounds, Vec::new(), |_, id| prepare(id), PAR_MIN)
     }
 
-    /// The build over `ids` and `bounds`; `prepare(i, ids[i])` gives input i's prepared simplex.
+    /// [`Bvh::build_lazily`], with the simplices of each of `cells` held as one flat cell (see
+    /// `cell.rs`) when they form one: a ray that meets the cell is tested against the block of
+    /// the simplex a walk finds, not against all of them. Hits and ids are bit for bit those of
+    /// [`Bvh::build_lazily`]. The cells that do not pass the checks of `CellGeometry::new` are
+    /// built as ordinary simplices.
+    ///
+    /// # Panics
+    /// As [`Bvh::build_lazily`], and if a cell's member is out of range, or in two of the cells
+    /// kept, or if its `points` and `members` differ in length.
+    pub fn build_lazily_with_cells(
+        ids: Vec<u32>,
+        bounds: Vec<([f64; N], [f64; N])>,
+        cells: Vec<FlatCell<N>>,
+        prepare: impl Fn(u32) -> PreparedSimplex<N> + Sync,
+    ) -> Self {
+        Self::build_from(ids, bounds, cells, |_, id| prepare(id), PAR_MIN)
+    }
+
+    /// The build over `ids` and `bounds` with the flat `cells`; `prepare(i, ids[i])` gives
+    /// input i's prepared simplex.
     fn build_from(
         ids: Vec<u32>,
         bounds: Vec<([f64; N], [f64; N])>,
+        cells: Vec<FlatCell<N>>,
         prepare: impl Fn(usize, u32) -> PreparedSimplex<N> + Sync,
         par_min: usize,
     ) -> Self {
@@ -483,10 +509,66 @@ impl<const N: usize> Bvh<N> {
                 len: 0,
                 reach: 0.0,
                 ranges: Vec::new(),
+                cells: Vec::new(),
+                cell_links: Vec::new(),
             };
         }
-        let (bin, idx) = binary_tree(bounds, par_min);
-        let (nodes, blocks) = wide_tree(&bin, &idx, |i| prepare(i, ids[i]), &ids);
+        // The cells that pass the checks; the binary tree is built over the other simplices
+        // and one box per cell (after them).
+        let cells: Vec<(Vec<u32>, CellGeometry<N>)> = cells
+            .into_par_iter()
+            .filter_map(|c| {
+                assert_eq!(
+                    c.members.len(),
+                    c.points.len(),
+                    "FlatCell: members and points differ in length"
+                );
+                let prepared = (c.members.iter())
+                    .map(|&i| prepare(i as usize, ids[i as usize]))
+                    .collect();
+                CellGeometry::new(&c.points, prepared).map(|g| (c.members, g))
+            })
+            .collect();
+        let (bin, order) = if cells.is_empty() {
+            binary_tree(bounds, par_min, u32::MAX)
+        } else {
+            let mut in_cell = vec![false; n];
+            for &i in cells.iter().flat_map(|(m, _)| m) {
+                assert!(
+                    !std::mem::replace(&mut in_cell[i as usize], true),
+                    "FlatCell: input {i} is in two cells"
+                );
+            }
+            let plain: Vec<u32> = (0..n as u32).filter(|&i| !in_cell[i as usize]).collect();
+            drop(in_cell);
+            let mut prims: Vec<Bounds<N>> = plain.iter().map(|&i| bounds[i as usize]).collect();
+            for (members, _) in &cells {
+                let mut b = ([f64::INFINITY; N], [f64::NEG_INFINITY; N]);
+                for &i in members {
+                    let (lo, hi) = &bounds[i as usize];
+                    for a in 0..N {
+                        b.0[a] = b.0[a].min(lo[a]);
+                        b.1[a] = b.1[a].max(hi[a]);
+                    }
+                }
+                prims.push(b);
+            }
+            drop(bounds);
+            let from = plain.len() as u32;
+            let (bin, idx) = binary_tree(prims, par_min, from);
+            let order = idx
+                .into_iter()
+                .map(|p| {
+                    if p < from {
+                        plain[p as usize]
+                    } else {
+                        CELL_MARK | (p - from)
+                    }
+                })
+                .collect();
+            (bin, order)
+        };
+        let tree = wide_tree(&bin, &order, |i| prepare(i, ids[i]), &ids, &cells);
         drop(ids);
         let root = &bin[0];
         let reach = (0..N)
@@ -498,13 +580,15 @@ impl<const N: usize> Bvh<N> {
         } else {
             f64::from(f32::MAX)
         };
-        let ranges = id_ranges(&nodes, &blocks);
+        let ranges = id_ranges(&tree.nodes, &tree.blocks, &tree.cells);
         Bvh {
-            nodes,
-            blocks,
+            nodes: tree.nodes,
+            blocks: tree.blocks,
             len: n,
             reach,
             ranges,
+            cells: tree.cells,
+            cell_links: tree.cell_links,
         }
     }
 

@@ -1,10 +1,17 @@
 //! The collapse of the binary SAH tree into the wide tree: which binary nodes become wide nodes
 //! (the optimal plan), the leaf blocks, and the id ranges of every child slot.
 
+use super::cell::{Cell, CellGeometry};
 use super::simplex::PreparedSimplex;
 use super::tree::{
-    half_area, BinaryNode, LeafBlock, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
+    half_area, BinaryNode, LeafBlock, WideNode, BLOCK_WIDTH, CELL_TAG, EMPTY_SLOT, LEAF_TAG,
+    NODE_WIDTH,
 };
+
+/// The mark of a flat cell in the leaf order: `CELL_MARK | c` is cell c of the build's list.
+pub(super) const CELL_MARK: u32 = 1 << 31;
+/// The `block_first` of a block already filled (a flat cell's).
+const FILLED: u32 = u32::MAX;
 use rayon::prelude::*;
 
 /// How each binary subtree is laid out in the wide tree: the optimal collapse of Ylitie,
@@ -104,18 +111,23 @@ struct Collapse<'a, const N: usize> {
     bin: &'a [BinaryNode<N>],
     plan: CollapsePlan,
     /// The input ids, and the leaf order: `order[j]` is the input index of the j-th simplex in
-    /// leaf order.
+    /// leaf order (or `CELL_MARK | c` for cell c).
     ids: &'a [u32],
     order: &'a [u32],
+    /// The flat cells of the build (members, geometry), and those made so far with their links.
+    cells_in: &'a [(Vec<u32>, CellGeometry<N>)],
+    cells: Vec<Cell>,
+    cell_links: Vec<[u32; N]>,
     nodes: Vec<WideNode<N>>,
     /// The blocks, their simplices' ids set and their prepared simplices filled in afterwards
-    /// (in parallel) from `block_first`, the position of each block's first simplex in `order`.
+    /// (in parallel) from `block_first`, the position of each block's first simplex in `order`
+    /// ([`FILLED`] for the blocks of flat cells, filled when made).
     blocks: Vec<LeafBlock<N>>,
     block_first: Vec<u32>,
 }
 
 impl<const N: usize> Collapse<'_, N> {
-    /// The reference (node index or `LEAF_TAG | block`) of binary node `b`'s subtree.
+    /// The reference (node index, `LEAF_TAG | block` or a flat cell's) of binary node `b`'s subtree.
     fn child_ref(&mut self, b: usize) -> u32 {
         if self.bin[b].count > 0 {
             self.leaf(b)
@@ -126,18 +138,64 @@ impl<const N: usize> Collapse<'_, N> {
 
     fn leaf(&mut self, b: usize) -> u32 {
         let nd = self.bin[b];
-        let mut block = LeafBlock {
-            m: [[[0.0; BLOCK_WIDTH]; N]; N],
-            x0: [[0.0; BLOCK_WIDTH]; N],
-            ids: [EMPTY_SLOT; BLOCK_WIDTH],
-            count: nd.count,
-        };
+        let first = self.order[nd.first as usize];
+        if first & CELL_MARK != 0 {
+            debug_assert_eq!(nd.count, 1);
+            return self.cell((first & !CELL_MARK) as usize);
+        }
+        let mut block = LeafBlock::EMPTY;
+        block.count = nd.count;
         for l in 0..nd.count as usize {
             block.ids[l] = self.ids[self.order[nd.first as usize + l] as usize];
         }
+        self.push_block(block, nd.first)
+    }
+
+    /// Appends a block whose simplices start at position `first` of the leaf order (or that is
+    /// [`FILLED`]); its reference.
+    fn push_block(&mut self, block: LeafBlock<N>, first: u32) -> u32 {
+        assert!(
+            self.blocks.len() < CELL_TAG as usize,
+            "Bvh::build: too many blocks"
+        );
         self.blocks.push(block);
-        self.block_first.push(nd.first);
+        self.block_first.push(first);
         LEAF_TAG | (self.blocks.len() - 1) as u32
+    }
+
+    /// The blocks of flat cell c (its members in order, filled now from the prepared simplices
+    /// of its geometry) and its reference.
+    fn cell(&mut self, c: usize) -> u32 {
+        let (members, geometry) = &self.cells_in[c];
+        let first_block = self.blocks.len() as u32;
+        for (chunk, prepared) in members
+            .chunks(BLOCK_WIDTH)
+            .zip(geometry.prepared.chunks(BLOCK_WIDTH))
+        {
+            let mut block = LeafBlock::EMPTY;
+            block.count = chunk.len() as u32;
+            for (l, (&i, p)) in chunk.iter().zip(prepared).enumerate() {
+                block.ids[l] = self.ids[i as usize];
+                block.set_lane(l, p);
+            }
+            self.push_block(block, FILLED);
+        }
+        assert!(
+            self.cells.len() < (CELL_TAG - 1) as usize,
+            "Bvh::build: too many cells"
+        );
+        self.cells.push(Cell {
+            first_block,
+            end_block: self.blocks.len() as u32,
+            count: members.len() as u32,
+            links: self.cell_links.len() as u32,
+            start: geometry.start,
+            tau: geometry.tau,
+            err0: geometry.err0,
+            trusted: geometry.trusted,
+        });
+        self.cell_links.extend_from_slice(&geometry.neighbours);
+        LEAF_TAG | CELL_TAG | (self.cells.len() - 1) as u32
     }
 
     /// The wide node over binary inner node `b`: its children as the [`CollapsePlan`] lays them out,
@@ -169,20 +227,28 @@ impl<const N: usize> Collapse<'_, N> {
 pub(super) fn id_ranges<const N: usize>(
     nodes: &[WideNode<N>],
     blocks: &[LeafBlock<N>],
+    cells: &[Cell],
 ) -> Vec<[[u32; NODE_WIDTH]; 2]> {
+    let block_range = |b: &LeafBlock<N>| {
+        let ids = &b.ids[..b.count as usize];
+        (
+            ids.iter().copied().min().unwrap(),
+            ids.iter().copied().max().unwrap(),
+        )
+    };
     let mut ranges = vec![[[u32::MAX; NODE_WIDTH], [0; NODE_WIDTH]]; nodes.len()];
     for i in (0..nodes.len()).rev() {
         for l in 0..NODE_WIDTH {
             let c = nodes[i].child[l];
             let (lo, hi) = if c == EMPTY_SLOT {
                 (u32::MAX, 0)
+            } else if c & (LEAF_TAG | CELL_TAG) == LEAF_TAG | CELL_TAG {
+                let cell = &cells[(c & !(LEAF_TAG | CELL_TAG)) as usize];
+                cell.blocks()
+                    .map(|b| block_range(&blocks[b as usize]))
+                    .fold((u32::MAX, 0), |(a, b), (c, d)| (a.min(c), b.max(d)))
             } else if c & LEAF_TAG != 0 {
-                let b = &blocks[(c & !LEAF_TAG) as usize];
-                let ids = &b.ids[..b.count as usize];
-                (
-                    ids.iter().copied().min().unwrap(),
-                    ids.iter().copied().max().unwrap(),
-                )
+                block_range(&blocks[(c & !LEAF_TAG) as usize])
             } else {
                 let r = &ranges[c as usize];
                 (
@@ -197,22 +263,34 @@ pub(super) fn id_ranges<const N: usize>(
     ranges
 }
 
-/// The wide nodes and leaf blocks (both in depth-first order) over the binary tree `bin` with
-/// leaf order `order`, laid out by the [`CollapsePlan`]; `prepare(i)` and `ids[i]` are the
-/// input simplices. The blocks' simplices are prepared in parallel once the layout is known,
-/// so that no list of prepared simplices is alive beside the blocks.
+/// The wide tree: nodes and leaf blocks (both in depth-first order), flat cells and their links.
+pub(super) struct WideTree<const N: usize> {
+    pub(super) nodes: Vec<WideNode<N>>,
+    pub(super) blocks: Vec<LeafBlock<N>>,
+    pub(super) cells: Vec<Cell>,
+    pub(super) cell_links: Vec<[u32; N]>,
+}
+
+/// The wide tree over the binary tree `bin` with leaf order `order` (input indices, and
+/// `CELL_MARK | c` for the flat cells `cells`), laid out by the [`CollapsePlan`]; `prepare(i)`
+/// and `ids[i]` are the input simplices. The blocks' simplices are prepared in parallel once
+/// the layout is known, so that no list of prepared simplices is alive beside the blocks.
 pub(super) fn wide_tree<const N: usize>(
     bin: &[BinaryNode<N>],
     order: &[u32],
     prepare: impl Fn(usize) -> PreparedSimplex<N> + Sync,
     ids: &[u32],
-) -> (Vec<WideNode<N>>, Vec<LeafBlock<N>>) {
+    cells: &[(Vec<u32>, CellGeometry<N>)],
+) -> WideTree<N> {
     let plan = CollapsePlan::new(bin);
     let mut c = Collapse {
         bin,
         plan,
         ids,
         order,
+        cells_in: cells,
+        cells: Vec::with_capacity(cells.len()),
+        cell_links: Vec::new(),
         nodes: Vec::new(),
         blocks: Vec::with_capacity(bin.iter().filter(|b| b.count > 0).count()),
         block_first: Vec::new(),
@@ -232,20 +310,18 @@ pub(super) fn wide_tree<const N: usize>(
     let (mut nodes, mut blocks) = (c.nodes, c.blocks);
     (blocks.par_iter_mut().zip(c.block_first))
         .with_min_len(256)
+        .filter(|(_, first)| *first != FILLED)
         .for_each(|(block, first)| {
             for l in 0..block.count as usize {
-                let p = prepare(order[first as usize + l] as usize);
-                for k in 0..N {
-                    for i in 0..N {
-                        block.m[k][i][l] = p.m[k][i];
-                    }
-                }
-                for i in 0..N {
-                    block.x0[i][l] = p.x0[i];
-                }
+                block.set_lane(l, &prepare(order[first as usize + l] as usize));
             }
         });
     nodes.shrink_to_fit();
     blocks.shrink_to_fit();
-    (nodes, blocks)
+    WideTree {
+        nodes,
+        blocks,
+        cells: c.cells,
+        cell_links: c.cell_links,
+    }
 }

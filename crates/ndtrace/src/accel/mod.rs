@@ -40,7 +40,26 @@
 //! The binary tree is collapsed into an 8-wide tree by the optimal collapse of Ylitie, Karras and
 //! Laine (a dynamic program that minimises the summed boundary measure of the wide nodes). The
 //! boxes of a node's up to 8 children are stored in `f32`, rounded outward (so conservative);
-//! every leaf is one *block* of up to 4 prepared simplices with their ids (`tree.rs`).
+//! every leaf is one *block* of up to 4 prepared simplices with their ids (`tree.rs`), or a flat
+//! cell (3b).
+//!
+//! ## 3b. Flat cells (`cell.rs`)
+//! The simplices that tile one flat convex (N−1)-cell (a facet of the N-cube: (N−1)! Kuhn
+//! simplices sharing a diagonal, whose boxes no tree can separate) may be given to the build as
+//! a [`FlatCell`] ([`Bvh::build_lazily_with_cells`]). After checking that they are one (flat,
+//! convex, properly tiled, connected), the build makes the cell a single leaf, its simplices in
+//! consecutive blocks. A ray that reaches it meets the cell's hyperplane at X and walks from
+//! simplex to neighbour, stepping across the facet of the most negative barycentric
+//! coordinate, to the simplex holding X; only that simplex's block is tested. When X lies near
+//! a ridge, the ray is nearly parallel to the cell or the walk is long, every block of the cell
+//! is tested. Hits and ids are those of the simplices alone, bit for bit (the bound is in
+//! `cell.rs`).
+//!
+//! ## 3c. Refitting (`refit.rs`)
+//! [`Bvh::refit`] gives the tree of the same simplices moved (an animation frame that moves
+//! objects) without a build: the blocks are prepared again from the moved vertices, the flat
+//! cells checked again, and the boxes recomputed bottom-up in the tree's shape. Every query
+//! returns the least (t, id), whatever the shape, so it answers as a build would, bit for bit.
 //!
 //! ## 4. Traversal (`traverse.rs`)
 //! Nearest-first: the children met are visited in order of entry distance, and subtrees whose
@@ -75,6 +94,10 @@ mod build;
 mod morton;
 // 3. The wide collapse.
 mod collapse;
+// 3b. Flat cells: the simplices of a flat facet as one leaf.
+mod cell;
+// 3c. Refitting a tree to moved simplices.
+mod refit;
 // 4. The queries.
 mod traverse;
 // The memory layout of the trees, the rays prepared for traversal, the kernels, the counters.
@@ -89,6 +112,7 @@ mod tests;
 /// The ray and hit types of the queries, re-exported from [`crate::ray`].
 pub use crate::ray::{Hit, Ray};
 pub(crate) use build::BOX_PAD;
+pub use cell::FlatCell;
 pub use morton::MORTON_MIN;
 pub use packet::PACKET;
 pub use simplex::{simplex_bounds, Bounds, PreparedSimplex, BARY_SLACK};

@@ -248,6 +248,8 @@ impl<const N: usize> Bvh<N> {
             len: 0,
             reach: 0.0,
             ranges: Vec::new(),
+            cells: Vec::new(),
+            cell_links: Vec::new(),
         };
         if count == 0 {
             return empty;
@@ -412,6 +414,8 @@ impl<const N: usize> Bvh<N> {
             len,
             reach,
             ranges,
+            cells: Vec::new(),
+            cell_links: Vec::new(),
         }
     }
 }

@@ -2,11 +2,15 @@
 //! hit, with the SIMD kernels chosen once per query.
 
 use super::build::MAX_SAH_DEPTH;
+use super::cell::{Cell, Pick};
 use super::kernels::{leaf_slots, prefetch_block, slabs, within};
 use super::packet::{Packet, PACKET};
 use super::simplex::PreparedRay;
 use super::stats;
-use super::tree::{f32_down, f32_up, BlockHits, Bvh, LeafBlock, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH};
+use super::tree::{
+    f32_down, f32_up, BlockHits, Bvh, LeafBlock, BLOCK_WIDTH, CELL_TAG, EMPTY_SLOT, LEAF_TAG,
+    NODE_WIDTH,
+};
 use crate::ray::{Hit, Ray};
 use std::mem::MaybeUninit;
 use std::ops::Range;
@@ -199,19 +203,55 @@ impl<const N: usize> Bvh<N> {
         self.any_hits_impl::<true, P>(rays, tmin, tmax, accept, skip, out)
     }
 
-    /// The block of a child reference with the `LEAF_TAG` bit.
+    /// Calls `test` with each block a ray must be tested against at leaf reference `leaf`: the
+    /// leaf's block, or for a flat cell the blocks [`Cell::pick`] chooses.
     #[inline(always)]
-    fn block(&self, child: u32) -> &LeafBlock<N> {
-        &self.blocks[(child & !LEAF_TAG) as usize]
+    fn leaf_blocks(&self, leaf: u32, ray: &PreparedRay<N>, test: &mut impl FnMut(u32)) {
+        if leaf & CELL_TAG == 0 {
+            return test(leaf & !LEAF_TAG);
+        }
+        let cell = &self.cells[(leaf & !(LEAF_TAG | CELL_TAG)) as usize];
+        stats::count(1);
+        match self.cell_pick(cell, ray) {
+            Pick::Miss => {}
+            Pick::Simplex(s) => test(cell.first_block + s / BLOCK_WIDTH as u32),
+            Pick::All => cell.blocks().for_each(test),
+        }
     }
 
-    /// The address of [`Bvh::block`] for prefetching: no bounds check (a prefetch never
-    /// faults), which a few prefetches per node visit would pay for.
+    /// [`Cell::pick`] over the cell's simplices as this tree's blocks hold them.
+    #[inline]
+    pub(super) fn cell_pick(&self, cell: &Cell, ray: &PreparedRay<N>) -> Pick {
+        let at = |s: u32| {
+            let slot = cell.first_block as usize * BLOCK_WIDTH + s as usize;
+            (&self.blocks[slot / BLOCK_WIDTH], slot % BLOCK_WIDTH)
+        };
+        let (b, l) = at(cell.start);
+        let plane = (
+            std::array::from_fn(|i| b.m[0][i][l]),
+            std::array::from_fn(|i| b.x0[i][l]),
+        );
+        cell.pick(&self.cell_links, ray, plane, |s, x| {
+            let (b, l) = at(s);
+            b.bary_at(l, x)
+        })
+    }
+
+    /// The address of a leaf's block for prefetching: no bounds check (a prefetch never
+    /// faults), which a few prefetches per node visit would pay for. Not for flat cells.
     #[inline(always)]
     fn block_ptr(&self, child: u32) -> *const LeafBlock<N> {
         self.blocks
             .as_ptr()
             .wrapping_add((child & !LEAF_TAG) as usize)
+    }
+
+    /// Fetches a leaf's block whole, about to be tested (a flat cell's are found by its walk).
+    #[inline(always)]
+    fn prefetch_leaf(&self, leaf: u32) {
+        if leaf & CELL_TAG == 0 {
+            prefetch_block(self.block_ptr(leaf), size_of::<LeafBlock<N>>());
+        }
     }
 
     /// Tests a block, with the AVX2 kernel when `AVX` (only instantiated inside functions
@@ -239,9 +279,9 @@ impl<const N: usize> Bvh<N> {
     /// they are popped nearest first). A child's entry parameter is the smallest among its rays.
     /// Without `NEAREST_FIRST` (any-hit queries, whose answer does not depend on the order) the
     /// children go in slot order, unsorted, and those whose ids all lie in `skip` are dropped.
-    /// Leaves met are not sorted either when no inner node is met with them: the nearest hit
-    /// does not depend on the order (see [`Bvh::closest_hit`]), sorting a few leaves costs
-    /// unpredictable branches, and it saves few block tests.
+    /// Leaves met are not sorted either when no inner node or flat cell is met with them: the
+    /// nearest hit does not depend on the order (see [`Bvh::closest_hit`]), sorting a few
+    /// leaves costs unpredictable branches, and it saves few block tests.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn descend<const AVX: bool, const P: usize, const NEAREST_FIRST: bool>(
@@ -274,11 +314,16 @@ impl<const N: usize> Bvh<N> {
         if mask == 0 {
             return (EMPTY_SLOT, 0);
         }
-        // The slots holding leaves (or nothing), and those holding nothing.
+        // The slots holding leaves (or nothing), those holding nothing, and the flat cells.
         let (leafy, empty) = leaf_slots::<AVX>(&nd.child);
+        let cells = if self.cells.is_empty() {
+            0
+        } else {
+            cell_slots(&nd.child)
+        };
         if NEAREST_FIRST {
             // The leaves the next packets will likely meet (see `prefetch_block`).
-            let mut leaves = leafy & !empty;
+            let mut leaves = leafy & !empty & !cells;
             while leaves != 0 {
                 let l = leaves.trailing_zeros() as usize;
                 leaves &= leaves - 1;
@@ -292,7 +337,9 @@ impl<const N: usize> Bvh<N> {
             let l = mask.trailing_zeros() as usize;
             return (nd.child[l], rays_of(l));
         }
-        if !NEAREST_FIRST || mask & !leafy == 0 {
+        // Flat cells cost a walk each: sorted like inner nodes, so that the nearest is met
+        // first and its hit culls the others.
+        if !NEAREST_FIRST || mask & (!leafy | cells) == 0 {
             // Any order finds the same answer (shadow rays, leaves): children in slot order.
             let mut rest = mask & (mask - 1);
             while rest != 0 {
@@ -411,40 +458,45 @@ impl<const N: usize> Bvh<N> {
                 );
             }
             if cur != EMPTY_SLOT {
-                let block = self.block(cur);
-                prefetch_block(block, size_of::<LeafBlock<N>>());
+                self.prefetch_leaf(cur);
                 let mut left = cur_rays;
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
                     left &= left - 1;
-                    let hits =
-                        self.block_hit::<AVX>(block, &packet.pre[q].prepared, tmin, tmax_b[q]);
-                    let mut mask = hits.mask;
-                    let b = &mut best[q];
-                    while mask != 0 {
-                        let l = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        let (t, id) = (hits.t[l], block.ids[l]);
-                        if (!b.found || t < b.t || (t == b.t && id < b.id)) && accept(id) {
-                            *b = BestHit {
-                                t,
-                                id,
-                                bary: hits.bary(l),
-                                found: true,
-                                block: cur & !LEAF_TAG,
-                                lane: l as u32,
-                            };
-                            limit[q] = f32_up(pad_up(t));
-                            // `t.next_up()`, by one step when t > 0 (then finite: the block
-                            // tests accept only t < tmax_b, strictly).
-                            debug_assert!(t < f64::INFINITY);
-                            tmax_b[q] = if t > 0.0 {
-                                f64::from_bits(t.to_bits() + 1)
-                            } else {
-                                t.next_up()
-                            };
+                    let ray = &packet.pre[q].prepared;
+                    let mut test = |b: u32| {
+                        let block = &self.blocks[b as usize];
+                        let hits = self.block_hit::<AVX>(block, ray, tmin, tmax_b[q]);
+                        let mut mask = hits.mask;
+                        let best = &mut best[q];
+                        while mask != 0 {
+                            let l = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            let (t, id) = (hits.t[l], block.ids[l]);
+                            if (!best.found || t < best.t || (t == best.t && id < best.id))
+                                && accept(id)
+                            {
+                                *best = BestHit {
+                                    t,
+                                    id,
+                                    bary: hits.bary(l),
+                                    found: true,
+                                    block: b,
+                                    lane: l as u32,
+                                };
+                                limit[q] = f32_up(pad_up(t));
+                                // `t.next_up()`, by one step when t > 0 (then finite: the
+                                // block tests accept only t < tmax_b, strictly).
+                                debug_assert!(t < f64::INFINITY);
+                                tmax_b[q] = if t > 0.0 {
+                                    f64::from_bits(t.to_bits() + 1)
+                                } else {
+                                    t.next_up()
+                                };
+                            }
                         }
-                    }
+                    };
+                    self.leaf_blocks(cur, ray, &mut test);
                 }
             }
             // Pop the next subtree whose entry parameter is still within reach of a ray.
@@ -510,24 +562,32 @@ impl<const N: usize> Bvh<N> {
                 );
             }
             if cur != EMPTY_SLOT {
-                let block = self.block(cur);
-                prefetch_block(block, size_of::<LeafBlock<N>>());
+                self.prefetch_leaf(cur);
                 let mut left = cur_rays & alive;
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
                     left &= left - 1;
-                    let mut mask = self
-                        .block_hit::<AVX>(block, &packet.pre[q].prepared, tmin, tmax[q])
-                        .mask;
-                    while mask != 0 {
-                        let l = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        let id = block.ids[l];
-                        if accept(id) && !skip.contains(&id) {
-                            out[q] = true;
-                            alive &= !(1 << q);
-                            break;
+                    let ray = &packet.pre[q].prepared;
+                    let mut hit = false;
+                    self.leaf_blocks(cur, ray, &mut |b: u32| {
+                        if hit {
+                            return;
                         }
+                        let block = &self.blocks[b as usize];
+                        let mut mask = self.block_hit::<AVX>(block, ray, tmin, tmax[q]).mask;
+                        while mask != 0 {
+                            let l = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            let id = block.ids[l];
+                            if accept(id) && !skip.contains(&id) {
+                                hit = true;
+                                break;
+                            }
+                        }
+                    });
+                    if hit {
+                        out[q] = true;
+                        alive &= !(1 << q);
                     }
                 }
             }
@@ -537,6 +597,16 @@ impl<const N: usize> Bvh<N> {
             }
         }
     }
+}
+
+/// The bit set of the slots of `child` that hold flat cells.
+#[inline(always)]
+fn cell_slots(child: &[u32; NODE_WIDTH]) -> u32 {
+    let mut m = 0;
+    for (l, &c) in child.iter().enumerate() {
+        m |= u32::from(c & (LEAF_TAG | CELL_TAG) == LEAF_TAG | CELL_TAG && c != EMPTY_SLOT) << l;
+    }
+    m
 }
 
 /// A traversal stack entry: a subtree, the rays of the packet that met its box, and the

@@ -2,6 +2,7 @@
 //! leaf blocks of `BLOCK_WIDTH` prepared simplices stored structure-of-arrays, the binary nodes of the
 //! build, and the box measure both the build and the collapse minimise.
 
+use super::cell::Cell;
 use super::simplex::bary_from;
 use crate::linalg::Vector;
 
@@ -16,6 +17,9 @@ pub(super) const NODE_WIDTH: usize = 8;
 /// The bit that tags a child reference as a leaf: `LEAF_TAG | b` is leaf block b, a reference
 /// without it a wide node's index.
 pub(super) const LEAF_TAG: u32 = 1 << 31;
+/// The bit that tags a leaf reference as a flat cell: `LEAF_TAG | CELL_TAG | c` is cell c of
+/// [`Bvh::cells`] (see `cell.rs`). Block indices stay below it.
+pub(super) const CELL_TAG: u32 = 1 << 30;
 /// The reference of an unused child slot (its box is empty, so it is never entered). It has the
 /// [`LEAF_TAG`] bit too, so one test sorts slots into inner nodes and the rest.
 pub(super) const EMPTY_SLOT: u32 = u32::MAX;
@@ -28,7 +32,8 @@ pub(super) struct WideNode<const N: usize> {
     /// `bounds[0][axis][lane]` = min corner, `bounds[1][axis][lane]` = max corner (f32 rounded outward;
     /// +∞/−∞ for an empty slot).
     pub(super) bounds: [[[f32; NODE_WIDTH]; N]; 2],
-    /// A node index, `LEAF_TAG | block index`, or `EMPTY_SLOT`.
+    /// A node index, `LEAF_TAG | block index`, `LEAF_TAG | CELL_TAG | cell index`, or
+    /// `EMPTY_SLOT`.
     pub(super) child: [u32; NODE_WIDTH],
 }
 
@@ -101,6 +106,46 @@ impl<const N: usize> BlockHits<N> {
 }
 
 impl<const N: usize> LeafBlock<N> {
+    /// A block with no simplices (unused lanes are zero, and miss as parallel rays).
+    pub(super) const EMPTY: Self = LeafBlock {
+        m: [[[0.0; BLOCK_WIDTH]; N]; N],
+        x0: [[0.0; BLOCK_WIDTH]; N],
+        ids: [EMPTY_SLOT; BLOCK_WIDTH],
+        count: 0,
+    };
+
+    /// Stores the prepared simplex `p` in lane `l`.
+    #[inline]
+    pub(super) fn set_lane(&mut self, l: usize, p: &super::PreparedSimplex<N>) {
+        for k in 0..N {
+            for i in 0..N {
+                self.m[k][i][l] = p.m[k][i];
+            }
+        }
+        for i in 0..N {
+            self.x0[i][l] = p.x0[i];
+        }
+    }
+
+    /// The barycentric coordinates, with respect to lane `l`, of the orthogonal projection of
+    /// `x` onto its hyperplane ([`PreparedSimplex::barycentric`](super::PreparedSimplex::barycentric) read from the block).
+    #[inline(always)]
+    pub(super) fn bary_at(&self, l: usize, x: &Vector<N>) -> [f64; N] {
+        let q: Vector<N> = std::array::from_fn(|i| x[i] - self.x0[i][l]);
+        let mut b = [0.0; N];
+        let mut sum = 0.0;
+        for k in 1..N {
+            let mut s = 0.0;
+            for i in 0..N {
+                s += self.m[k][i][l] * q[i];
+            }
+            b[k] = s;
+            sum += s;
+        }
+        b[0] = 1.0 - sum;
+        b
+    }
+
     /// Bytes of `x0` and `m[0]` (n̂), which lead the block: all that a test reads before its
     /// early exit.
     pub(super) const HEAD: usize = 2 * N * BLOCK_WIDTH * size_of::<f64>();
@@ -121,6 +166,10 @@ pub struct Bvh<const N: usize> {
     /// subtree (`u32::MAX`, 0 for an empty slot), so that an any-hit query told to skip a range
     /// of ids ([`Bvh::any_hit`]) leaves out the subtrees that hold nothing else.
     pub(super) ranges: Vec<[[u32; NODE_WIDTH]; 2]>,
+    /// The flat cells (see `cell.rs`); their simplices are in `blocks`.
+    pub(super) cells: Vec<Cell>,
+    /// The cells' neighbour links, `count` per cell from its `links`.
+    pub(super) cell_links: Vec<[u32; N]>,
 }
 
 /// A binary node of the build: f32 bounds rounded outward and either two children (the left
@@ -178,6 +227,13 @@ impl<const N: usize> Bvh<N> {
         self.nodes.len()
             * (std::mem::size_of::<WideNode<N>>() + std::mem::size_of::<[[u32; NODE_WIDTH]; 2]>())
             + self.blocks.len() * std::mem::size_of::<LeafBlock<N>>()
+            + self.cells.len() * std::mem::size_of::<Cell>()
+            + self.cell_links.len() * std::mem::size_of::<[u32; N]>()
+    }
+
+    /// Number of flat cells (each holding the simplices of one flat facet, see `cell.rs`).
+    pub fn cell_count(&self) -> usize {
+        self.cells.len()
     }
 
     /// Where each id `0..count` lies: `block · BLOCK_WIDTH + lane`, or `u32::MAX` for an id the

@@ -24,6 +24,7 @@
 //! zero-volume simplex becomes a neighbour of the others across it, so the zero-volume simplex
 //! neither hides a crease nor invents a boundary.
 
+use super::find;
 use crate::linalg::{dot, norm, scale, sub, Vector};
 use crate::NdResult;
 use rayon::prelude::*;
@@ -150,15 +151,6 @@ fn key_of(ids: impl Iterator<Item = u32>) -> Key {
 /// Whether a key of `len` vertices names `len` distinct vertices.
 fn distinct(k: &Key, len: usize) -> bool {
     k[..len].windows(2).all(|w| w[0] != w[1])
-}
-
-/// Union–find with path halving.
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        parent[x as usize] = parent[parent[x as usize] as usize];
-        x = parent[x as usize];
-    }
-    x
 }
 
 /// Step 1: the crease ridges (keys of N−1 vertices).

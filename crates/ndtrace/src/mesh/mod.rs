@@ -27,6 +27,16 @@ impl<const N: usize> Mesh<N> {
     }
 }
 
+/// Union–find with path halving: the root of `x`'s set.
+pub(crate) fn find(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        parent[x as usize] = parent[parent[x as usize] as usize];
+        x = parent[x as usize];
+    }
+    x
+}
+
 pub mod elevation;
 pub mod features;
+pub mod flat;
 pub use features::feature_edges;

@@ -8,7 +8,7 @@ pub use super::fields::Rgb;
 use super::fields::{coefficient, matrix_rows, mesh_from_rows, rgb, vec_n, R};
 use super::mesh_file::{orientation_warning, read_mesh, MeshReader};
 use super::transform::transform;
-use crate::accel::{simplex_bounds, Bounds, Bvh, PreparedSimplex, MORTON_MIN};
+use crate::accel::{simplex_bounds, Bounds, Bvh, FlatCell, PreparedSimplex, MORTON_MIN};
 use crate::camera::{look_at_orientation, Camera};
 use crate::linalg::{
     add, cofactor_matrix, det, dot, identity, mat_mul, mat_vec, norm, scale, transpose, Matrix,
@@ -765,6 +765,216 @@ pub(crate) fn build_using<const N: usize>(
     reader: Option<&dyn MeshReader>,
     morton_min: usize,
 ) -> R<Scene<N>> {
+    let Parts {
+        background,
+        ambient,
+        camera,
+        lights,
+        mut objects,
+        surface_warnings,
+    } = parts::<N>(desc, base, reader)?;
+    let r = &desc.render;
+    // 3. Prepared simplices and the BVH.
+    let (offsets, total) = offsets_of(&objects);
+    if total >= 1 << 31 {
+        return Err(PathError::new(
+            "objects",
+            format!(
+                "{total} simplices in all: at most {} are supported",
+                (1u64 << 31) - 1
+            ),
+        ));
+    }
+    let morton = total as usize >= morton_min;
+    crate::memory::check(
+        bvh_bytes(N, total as f64),
+        &format!("the BVH of {total} simplices"),
+    )
+    .map_err(|e| PathError::new("objects", e))?;
+    // The orientation check matches ridges, which takes memory in proportion to the mesh:
+    // done before the BVH is alive.
+    let mut warnings: Vec<String> = (objects.iter().zip(&desc.objects).enumerate())
+        .filter(|(_, (_, d))| d.shape == ShapeKind::Mesh)
+        .filter_map(|(i, (o, _))| orientation_warning(&o.mesh, &format!("objects[{i}]")))
+        .collect();
+    let shadows = r.shadows && !lights.is_empty();
+    let bvh = if morton {
+        let domain = objects
+            .par_iter()
+            .flat_map(|o| o.mesh.vertices.par_iter())
+            .map(|v| (*v, *v))
+            .reduce(empty_box, merge_boxes);
+        Bvh::build_morton(total as usize, domain, |g| {
+            simplex_at(&objects, &offsets, g)
+        })
+    } else {
+        sah_bvh(&mut objects, &desc.objects, &offsets, shadows)
+    };
+    let normal_slots = bvh.id_slots(total as usize);
+    let skipped = total as usize - bvh.len();
+    if morton && shadows {
+        certify_from_bvh(&mut objects, &desc.objects, &offsets, &bvh, &normal_slots);
+    }
+    let extent = extent_of(&objects, &offsets, &normal_slots);
+    warnings.extend(surface_warnings);
+    if skipped > 0 {
+        warnings.push(format!(
+            "skipped {skipped} degenerate (zero-volume) simplices"
+        ));
+    }
+    Ok(Scene {
+        camera,
+        objects: Arc::new(objects),
+        lights,
+        ambient,
+        background,
+        render: desc.render.clone(),
+        bvh: Arc::new(bvh),
+        normal_slots: Arc::new(normal_slots),
+        offsets,
+        skipped_degenerate: skipped,
+        extent,
+        warnings,
+        edge_cache: Arc::default(),
+    })
+}
+
+/// Convexity certificates from the normals the BVH holds (elevation maps are not certified:
+/// see `sah_bvh`); `slots` as [`Bvh::id_slots`] gives them.
+fn certify_from_bvh<const N: usize>(
+    objects: &mut [Object<N>],
+    descs: &[ObjectDesc],
+    offsets: &[u32],
+    bvh: &Bvh<N>,
+    slots: &[u32],
+) {
+    for (i, (o, d)) in objects.iter_mut().zip(descs).enumerate() {
+        if d.shape == ShapeKind::Elevation {
+            continue;
+        }
+        let first = offsets[i] as usize;
+        let normals: Vec<Vector<N>> = (first..first + o.mesh.simplices.len())
+            .into_par_iter()
+            .map(|g| match slots[g] {
+                u32::MAX => [0.0; N],
+                slot => bvh.slot_normal(slot),
+            })
+            .collect();
+        o.convex = crate::convex::convex_side(&o.mesh, &normals, known_convex(d.shape));
+    }
+}
+
+/// The diagonal of the box of the simplices the BVH holds (`slots` not `u32::MAX`) and of the
+/// surfaces' vertices (it sets their shadow rays' offset); min and max are exact in any order.
+fn extent_of<const N: usize>(objects: &[Object<N>], offsets: &[u32], slots: &[u32]) -> f64 {
+    let (mut lo, mut hi) = (0..slots.len())
+        .into_par_iter()
+        .filter(|&g| slots[g] != u32::MAX)
+        .map(|g| simplex_bounds(&simplex_at(objects, offsets, g)))
+        .reduce(empty_box, merge_boxes);
+    for o in objects.iter().filter(|o| o.surface.is_some()) {
+        for v in &o.mesh.vertices {
+            for k in 0..N {
+                lo[k] = lo[k].min(v[k]);
+                hi[k] = hi[k].max(v[k]);
+            }
+        }
+    }
+    if !lo[0].is_finite() {
+        1.0
+    } else {
+        norm(&std::array::from_fn::<f64, N, _>(|k| hi[k] - lo[k])).max(1e-300)
+    }
+}
+
+impl<const N: usize> Scene<N> {
+    /// The scene `desc` describes, when it differs from the description this scene was built
+    /// from only in its camera, `[composite]` and objects' transforms (a frame of an animation
+    /// that moves objects): its objects are built as a build makes them, and this scene's BVH
+    /// is refitted to them ([`Bvh::refit`]) instead of being built. It traces bit for bit as a
+    /// build of `desc` (every query returns the least (t, id), whatever the tree's shape).
+    /// `None` when the refit is refused (a simplex became degenerate or the reverse, or a
+    /// flat cell no longer passes its checks, or an object is read from a file): build `desc`
+    /// then. Its warnings are this
+    /// scene's (orientation and degeneracy do not change under the transforms a build applies).
+    pub(crate) fn moved(&self, desc: &SceneDesc) -> Option<R<Scene<N>>> {
+        // Objects read from files (meshes and elevation fields) would be read again: build anew.
+        let from_file =
+            |o: &ObjectDesc| o.file.is_some() || matches!(o.field, Some(FieldDesc::File(_)));
+        if desc.objects.iter().any(from_file) {
+            return None;
+        }
+        let Parts {
+            background,
+            ambient,
+            camera,
+            lights,
+            mut objects,
+            surface_warnings: _,
+        } = match parts::<N>(desc, None, None) {
+            Ok(p) => p,
+            Err(e) => return Some(Err(e)),
+        };
+        let (offsets, _) = offsets_of(&objects);
+        if offsets != self.offsets || objects.len() != self.objects.len() {
+            return None;
+        }
+        let bvh = self
+            .bvh
+            .refit(|g| simplex_at(&objects, &offsets, g as usize))?;
+        // The simplices the tree leaves out must still be degenerate.
+        let still = (0..self.normal_slots.len())
+            .into_par_iter()
+            .filter(|&g| self.normal_slots[g] == u32::MAX)
+            .all(|g| PreparedSimplex::new(&simplex_at(&objects, &offsets, g)).is_none());
+        if !still {
+            return None;
+        }
+        if desc.render.shadows && !lights.is_empty() {
+            certify_from_bvh(
+                &mut objects,
+                &desc.objects,
+                &offsets,
+                &bvh,
+                &self.normal_slots,
+            );
+        }
+        let extent = extent_of(&objects, &offsets, &self.normal_slots);
+        Some(Ok(Scene {
+            camera,
+            objects: Arc::new(objects),
+            lights,
+            ambient,
+            background,
+            render: desc.render.clone(),
+            bvh: Arc::new(bvh),
+            normal_slots: Arc::clone(&self.normal_slots),
+            offsets,
+            skipped_degenerate: self.skipped_degenerate,
+            extent,
+            warnings: self.warnings.clone(),
+            edge_cache: Arc::default(),
+        }))
+    }
+}
+
+/// What a build makes before the BVH: the checked colours, camera and lights, and the objects
+/// in world space (with the warnings about their surfaces).
+struct Parts<const N: usize> {
+    background: Rgb,
+    ambient: Rgb,
+    camera: Camera<N>,
+    lights: Vec<Light<N>>,
+    objects: Vec<Object<N>>,
+    surface_warnings: Vec<String>,
+}
+
+/// Steps 1 and 2 of a build: everything but the BVH.
+fn parts<const N: usize>(
+    desc: &SceneDesc,
+    base: Option<&Path>,
+    reader: Option<&dyn MeshReader>,
+) -> R<Parts<N>> {
     // 1. Everything that can be checked cheaply, before any heavy work.
     let background = rgb(&desc.background, "background")?;
     let ambient = rgb(&desc.ambient, "ambient")?;
@@ -947,108 +1157,25 @@ pub(crate) fn build_using<const N: usize>(
             texture,
         });
     }
-    // 3. Prepared simplices and the BVH.
+    Ok(Parts {
+        background,
+        ambient,
+        camera,
+        lights,
+        objects,
+        surface_warnings,
+    })
+}
+
+/// The first id of each object's simplices, and their total.
+fn offsets_of<const N: usize>(objects: &[Object<N>]) -> (Vec<u32>, u64) {
     let mut offsets = Vec::with_capacity(objects.len());
     let mut total = 0u64;
-    for o in &objects {
+    for o in objects {
         offsets.push(total as u32);
         total += o.mesh.simplices.len() as u64;
     }
-    if total >= 1 << 31 {
-        return Err(PathError::new(
-            "objects",
-            format!(
-                "{total} simplices in all: at most {} are supported",
-                (1u64 << 31) - 1
-            ),
-        ));
-    }
-    let morton = total as usize >= morton_min;
-    crate::memory::check(
-        bvh_bytes(N, total as f64),
-        &format!("the BVH of {total} simplices"),
-    )
-    .map_err(|e| PathError::new("objects", e))?;
-    // The orientation check matches ridges, which takes memory in proportion to the mesh:
-    // done before the BVH is alive.
-    let mut warnings: Vec<String> = (objects.iter().zip(&desc.objects).enumerate())
-        .filter(|(_, (_, d))| d.shape == ShapeKind::Mesh)
-        .filter_map(|(i, (o, _))| orientation_warning(&o.mesh, &format!("objects[{i}]")))
-        .collect();
-    let shadows = r.shadows && !lights.is_empty();
-    let bvh = if morton {
-        let domain = objects
-            .par_iter()
-            .flat_map(|o| o.mesh.vertices.par_iter())
-            .map(|v| (*v, *v))
-            .reduce(empty_box, merge_boxes);
-        Bvh::build_morton(total as usize, domain, |g| {
-            simplex_at(&objects, &offsets, g)
-        })
-    } else {
-        sah_bvh(&mut objects, &desc.objects, &offsets, shadows)
-    };
-    let normal_slots = bvh.id_slots(total as usize);
-    let skipped = total as usize - bvh.len();
-    if morton && shadows {
-        // Convexity certificates from the normals the BVH holds (elevation maps are not
-        // certified: see `sah_bvh`).
-        for (i, (o, d)) in objects.iter_mut().zip(&desc.objects).enumerate() {
-            if d.shape == ShapeKind::Elevation {
-                continue;
-            }
-            let first = offsets[i] as usize;
-            let normals: Vec<Vector<N>> = (first..first + o.mesh.simplices.len())
-                .into_par_iter()
-                .map(|g| match normal_slots[g] {
-                    u32::MAX => [0.0; N],
-                    slot => bvh.slot_normal(slot),
-                })
-                .collect();
-            o.convex = crate::convex::convex_side(&o.mesh, &normals, known_convex(d.shape));
-        }
-    }
-    // The extent of the simplices the BVH holds (min and max are exact in any order).
-    let (mut lo, mut hi) = (0..total as usize)
-        .into_par_iter()
-        .filter(|&g| normal_slots[g] != u32::MAX)
-        .map(|g| simplex_bounds(&simplex_at(&objects, &offsets, g)))
-        .reduce(empty_box, merge_boxes);
-    // Surface vertices count toward the scene's extent (it sets their shadow rays' offset).
-    for o in objects.iter().filter(|o| o.surface.is_some()) {
-        for v in &o.mesh.vertices {
-            for k in 0..N {
-                lo[k] = lo[k].min(v[k]);
-                hi[k] = hi[k].max(v[k]);
-            }
-        }
-    }
-    let extent = if !lo[0].is_finite() {
-        1.0
-    } else {
-        norm(&std::array::from_fn::<f64, N, _>(|k| hi[k] - lo[k])).max(1e-300)
-    };
-    warnings.extend(surface_warnings);
-    if skipped > 0 {
-        warnings.push(format!(
-            "skipped {skipped} degenerate (zero-volume) simplices"
-        ));
-    }
-    Ok(Scene {
-        camera,
-        objects: Arc::new(objects),
-        lights,
-        ambient,
-        background,
-        render: desc.render.clone(),
-        bvh: Arc::new(bvh),
-        normal_slots: Arc::new(normal_slots),
-        offsets,
-        skipped_degenerate: skipped,
-        extent,
-        warnings,
-        edge_cache: Arc::default(),
-    })
+    (offsets, total)
 }
 
 /// The points of global simplex g of the objects whose first global ids are `offsets` (what
@@ -1092,11 +1219,16 @@ fn sah_bvh<const N: usize>(
     // the BVH's blocks are filled, so that no list of them is alive beside the blocks.
     let mut ids = Vec::new();
     let mut bounds = Vec::new();
+    let mut cells = Vec::new();
     for ((o, &off), d) in objects.iter_mut().zip(offsets).zip(descs) {
         // Convexity certificates, which only shadow rays use. An elevation map is not
         // certified: it is a graph over a box, an open surface, and the test would cost more
         // than it saves.
         let certify = shadows && d.shape != ShapeKind::Elevation;
+        // Flat pieces are looked for in hypercubes and in meshes of up to MAX_FLAT_SEARCH
+        // simplices (matching their ridges costs a sort).
+        let search = d.shape == ShapeKind::Hypercube
+            || (d.shape == ShapeKind::Mesh && o.mesh.simplices.len() <= MAX_FLAT_SEARCH);
         let count = o.mesh.simplices.len();
         let kept: Vec<(u32, Bounds<N>)>;
         if certify {
@@ -1112,6 +1244,12 @@ fn sah_bvh<const N: usize>(
                 .collect();
             let normals: Vec<Vector<N>> = records.par_iter().map(|r| r.0).collect();
             o.convex = crate::convex::convex_side(&o.mesh, &normals, known_convex(d.shape));
+            if search {
+                let normal = |s: usize| records[s].1.map(|_| normals[s]);
+                for piece in crate::mesh::flat::flat_pieces(&o.mesh, normal, MIN_CELL) {
+                    cells.push((off, piece));
+                }
+            }
             kept = (records.into_par_iter().enumerate())
                 .filter_map(|(s, (_, b))| Some((off + s as u32, b?)))
                 .collect();
@@ -1123,6 +1261,14 @@ fn sah_bvh<const N: usize>(
                     PreparedSimplex::new(&pts).map(|_| (off + s as u32, simplex_bounds(&pts)))
                 })
                 .collect();
+            if search {
+                // The normals made again where they are needed (no list of them is kept).
+                let normal =
+                    |s: usize| PreparedSimplex::new(&o.mesh.simplex_points(s)).map(|p| p.normal());
+                for piece in crate::mesh::flat::flat_pieces(&o.mesh, normal, MIN_CELL) {
+                    cells.push((off, piece));
+                }
+            }
         }
         ids.reserve(kept.len());
         bounds.reserve(kept.len());
@@ -1131,8 +1277,33 @@ fn sah_bvh<const N: usize>(
             bounds.push(b);
         }
     }
-    Bvh::build_lazily(ids, bounds, |g| {
+    // The flat pieces as cells over the build's inputs (`ids`: the global ids of the
+    // non-degenerate simplices, increasing; a piece has no degenerate simplex).
+    let cells = cells
+        .into_iter()
+        .map(|(off, piece): (u32, Vec<u32>)| {
+            let members = piece
+                .iter()
+                .map(|&s| {
+                    ids.binary_search(&(off + s))
+                        .expect("a piece's simplex is kept") as u32
+                })
+                .collect();
+            let points = piece
+                .iter()
+                .map(|&s| simplex_at(objects, offsets, (off + s) as usize))
+                .collect();
+            FlatCell { members, points }
+        })
+        .collect();
+    Bvh::build_lazily_with_cells(ids, bounds, cells, |g| {
         PreparedSimplex::new(&simplex_at(objects, offsets, g as usize))
             .expect("a simplex prepared once prepares again")
     })
 }
+
+/// Fewest simplices a flat piece needs to be held as a flat cell: below this, testing its
+/// blocks costs less than a walk (an N-cube's facet has (N−1)! simplices: N ≥ 5).
+const MIN_CELL: usize = 24;
+/// Largest mesh whose flat pieces are looked for.
+const MAX_FLAT_SEARCH: usize = 1 << 18;

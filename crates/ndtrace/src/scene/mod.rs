@@ -200,27 +200,36 @@ pub fn animation_frame(desc: &SceneDesc, k: u32, name: &str) -> NdResult<SceneDe
     animation::frame_desc(desc, k).map_err(|e| locate(&Source::Unlocated(name), None, e))
 }
 
-/// Frame `k` of the `[animation]` of `desc` (built as `scene`) when the animation moves only
-/// the camera: the frame's description ([`animation_frame`]) and its scene, sharing `scene`'s
-/// objects and BVH ([`Scene::with_camera`]; bit for bit the scene a build of that description
-/// gives). `None` when the animation moves objects (or there is none): build the frame then.
-pub fn camera_frame(
+/// Frame `k` of the `[animation]` of `desc` (built as `scene`) without a build: the frame's
+/// description ([`animation_frame`]) and its scene, bit for bit the scene a build of that
+/// description gives. When the animation moves the camera, the frame shares `scene`'s objects
+/// and BVH ([`Scene::with_camera`]); when it moves objects, `scene`'s BVH is refitted to the
+/// moved objects (`Scene::moved`). `None` when there is no animation or the refit is refused:
+/// build the frame then.
+pub fn reused_frame(
     desc: &SceneDesc,
     scene: &AnyScene,
     k: u32,
     name: &str,
 ) -> Option<NdResult<(SceneDesc, AnyScene)>> {
     let a = desc.animation.as_ref()?;
-    if !matches!(&a.target, desc::AnimationTarget::Named(n) if n == "camera") {
-        return None;
-    }
-    Some(animation_frame(desc, k, name).and_then(|frame| {
-        let built = with_scene!(scene, s, _N => s
+    let camera = matches!(&a.target, desc::AnimationTarget::Named(n) if n == "camera");
+    let frame = match animation_frame(desc, k, name) {
+        Ok(f) => f,
+        Err(e) => return Some(Err(e)),
+    };
+    let built = if camera {
+        with_scene!(scene, s, _N => s
             .with_camera(&frame.camera, frame.composite.as_ref())
-            .map(IntoAny::into_any));
-        let built = built.map_err(|e| locate(&Source::Unlocated(name), None, e))?;
-        Ok((frame, built))
-    }))
+            .map(IntoAny::into_any))
+    } else {
+        with_scene!(scene, s, _N => s.moved(&frame)?.map(IntoAny::into_any))
+    };
+    Some(
+        built
+            .map(|b| (frame, b))
+            .map_err(|e| locate(&Source::Unlocated(name), None, e)),
+    )
 }
 
 /// Serializes a description as TOML (the inverse of [`load_toml_str`] for the description).
@@ -622,6 +631,22 @@ transform = [{ scale = 0.5 }, { rotate = { quaternions = [[0.6, 0, 0.8, 0], [0.5
         assert!(err(&wide).contains("objects[0].vertices[0]: expected 3 numbers (dim = 3), got 4"));
     }
 
+    /// The bits of a scene's retina: colour, depth, normals, object and primitive ids.
+    type Bits = (Vec<u32>, Vec<u32>, Vec<u32>, Vec<i32>, Vec<i64>);
+
+    /// The [`Bits`] of the retina `s` traces.
+    fn retina_bits(s: &AnyScene) -> Bits {
+        let r = with_scene!(s, s, _N => crate::render::trace(s, &Default::default()).unwrap());
+        let f = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        (
+            f(&r.rgba),
+            f(&r.depth),
+            f(&r.normal),
+            r.object_id,
+            r.primitive_id,
+        )
+    }
+
     #[test]
     fn camera_frames_share_the_bvh_and_trace_as_the_frames_built_anew() {
         let text = |target: &str, extra: &str| {
@@ -638,20 +663,10 @@ transform = [{ scale = 0.5 }, { rotate = { quaternions = [[0.6, 0, 0.8, 0], [0.5
             )
         };
         let (desc, scene) = load_toml_str(&text("\"camera\"", ""), "cam.toml", None).unwrap();
-        let bits = |s: &AnyScene| {
-            let r = with_scene!(s, s, _N => crate::render::trace(s, &Default::default()).unwrap());
-            let f = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-            (
-                f(&r.rgba),
-                f(&r.depth),
-                f(&r.normal),
-                r.object_id,
-                r.primitive_id,
-            )
-        };
+        let bits = retina_bits;
         let mut frames = Vec::new();
         for k in 0..4 {
-            let (frame, shared) = camera_frame(&desc, &scene, k, "cam.toml").unwrap().unwrap();
+            let (frame, shared) = reused_frame(&desc, &scene, k, "cam.toml").unwrap().unwrap();
             assert_eq!(frame, animation_frame(&desc, k, "cam.toml").unwrap());
             let built = build_any(&frame, None, None).unwrap();
             let traced = bits(&shared);
@@ -666,14 +681,80 @@ transform = [{ scale = 0.5 }, { rotate = { quaternions = [[0.6, 0, 0.8, 0], [0.5
         }
         // The camera moves: the frames differ.
         assert!(frames[1..].iter().all(|f| *f != frames[0]));
-        // Animations of objects are built frame by frame; frames that do not exist are refused.
-        let (d, s) = load_toml_str(&text("\"objects\"", ""), "obj.toml", None).unwrap();
-        assert!(camera_frame(&d, &s, 0, "obj.toml").is_none());
-        let err = camera_frame(&desc, &scene, 4, "cam.toml")
+        // Frames that do not exist are refused.
+        let err = reused_frame(&desc, &scene, 4, "cam.toml")
             .unwrap()
             .err()
             .unwrap()
             .to_string();
         assert!(err.contains("animation.frames"), "{err}");
+    }
+
+    #[test]
+    fn object_frames_refit_the_bvh_and_trace_as_the_frames_built_anew() {
+        // Frames of an animation that moves objects: the BVH refitted to the moved objects
+        // (flat cells included, in 5D) traces bit for bit as the frame's own build; shadows,
+        // convexity certificates and culling included; the whole scene, or one object.
+        fn check<const N: usize>(target: &str) {
+            let axis = crate::testutil::unit_toml::<N>;
+            let up: Vec<String> = (1..N - 1).map(|k| axis(k, 1.0)).collect();
+            let position: Vec<String> = (0..N)
+                .map(|i| format!("{:?}", 0.6 + 0.3 * i as f64))
+                .collect();
+            let text = format!(
+                "dim = {N}\n[camera]\nposition = [{}]\nlook_at = {}\nup = [{}]\nfov = 50\n\
+                 resolution = {}\n[[lights]]\ntype = \"point\"\nposition = {}\n\
+                 [[objects]]\nshape = \"hypercube\"\ntransform = [{{ scale = 0.6 }}]\n\
+                 [[objects]]\nshape = \"sphere\"\nsubdivisions = 1\nmaterial = {{ smooth = true }}\n\
+                 transform = [{{ scale = 0.3 }}, {{ translate = {} }}]\n\
+                 [[objects]]\nshape = \"mesh\"\nvertices = [{}]\nsimplices = [[0, 0, {}]]\n\
+                 [render]\nsamples = 2\nshadows = true\ncull_backfaces = true\n\
+                 [animation]\nframes = 4\ntarget = {target}\n\
+                 sweep = {{ plane = [0, {}], degrees = [0, 120] }}\n",
+                position.join(", "),
+                axis(0, 0.0),
+                up.join(", "),
+                if N == 4 { 12 } else { 6 },
+                axis(N - 1, 2.0),
+                axis(0, 0.7),
+                (0..N).map(|k| axis(k, 1.0 + k as f64)).collect::<Vec<_>>().join(", "),
+                (1..N - 1).map(|k| k.to_string()).collect::<Vec<_>>().join(", "),
+                N - 1
+            );
+            let (desc, scene) = load_toml_str(&text, "obj.toml", None).unwrap();
+            let bits = retina_bits;
+            let mut frames = Vec::new();
+            for k in 0..4 {
+                let (frame, refit) = reused_frame(&desc, &scene, k, "obj.toml").unwrap().unwrap();
+                let built = build_any(&frame, None, None).unwrap();
+                let traced = bits(&refit);
+                assert_eq!(traced, bits(&built), "N={N} {target} frame {k}");
+                match (&refit, &built) {
+                    (AnyScene::D4(a), AnyScene::D4(b)) => check_same(a, b),
+                    (AnyScene::D5(a), AnyScene::D5(b)) => check_same(a, b),
+                    _ => panic!("dim"),
+                }
+                frames.push(traced);
+            }
+            assert!(
+                frames[1..].iter().all(|f| *f != frames[0]),
+                "the objects move"
+            );
+        }
+        fn check_same<const N: usize>(refit: &Scene<N>, built: &Scene<N>) {
+            assert_eq!(refit.bvh.cell_count(), built.bvh.cell_count());
+            assert_eq!(refit.extent.to_bits(), built.extent.to_bits());
+            assert_eq!(refit.skipped_degenerate, built.skipped_degenerate);
+            for (a, b) in refit.objects.iter().zip(built.objects.iter()) {
+                assert_eq!(a.convex, b.convex);
+                assert_eq!(a.mesh, b.mesh);
+            }
+            for g in 0..built.simplex_count() as u32 {
+                assert_eq!(refit.flat_normal(g), built.flat_normal(g));
+            }
+        }
+        check::<4>("\"objects\"");
+        check::<4>("[1]");
+        check::<5>("\"objects\"");
     }
 }

@@ -29,6 +29,20 @@ pub fn random_points<const N: usize>(r: &mut TestRng, count: usize, s: f64) -> V
     (0..count).map(|_| random_vector(r, s)).collect()
 }
 
+/// `x·e_k` in R^N as a TOML array (scene texts of the tests).
+pub fn unit_toml<const N: usize>(k: usize, x: f64) -> String {
+    let v: Vec<String> = (0..N)
+        .map(|i| {
+            if i == k {
+                format!("{x:?}")
+            } else {
+                "0.0".into()
+            }
+        })
+        .collect();
+    format!("[{}]", v.join(", "))
+}
+
 /// A random rotation (orthonormal, det +1) from Gram–Schmidt on random rows.
 pub fn random_rotation<const N: usize>(r: &mut TestRng) -> Matrix<N> {
     loop {

@@ -29,7 +29,7 @@ fn wide_collapse_is_optimal<const N: usize>() {
         let count = r.random_range(30..70);
         let s = soup::<N>(&mut r, count);
         let bounds: Vec<Bounds<N>> = s.iter().map(|(p, _)| simplex_bounds(p)).collect();
-        let (bin, _) = binary_tree(bounds, PAR_MIN);
+        let (bin, _) = binary_tree(bounds, PAR_MIN, u32::MAX);
         let area = |b: usize| half_area(&bin[b].min.map(f64::from), &bin[b].max.map(f64::from));
         let inner: Vec<usize> = (1..bin.len()).filter(|&b| bin[b].count == 0).collect();
         if bin[0].count > 0 || inner.len() > 15 {

@@ -3,9 +3,11 @@
 //! here (random simplices and rays, brute force, soups of simplices) serve them all.
 
 mod build;
+mod cell;
 mod collapse;
 mod kernels;
 mod morton;
+mod refit;
 mod simplex;
 mod traverse;
 mod tree;
@@ -51,6 +53,31 @@ fn plane_point<const N: usize>(
         x = add_scaled(&x, *wi, p);
     }
     x
+}
+
+/// An affine map of the cube tests: the identity for `shape` 0, else a random rotation with
+/// random stretches in [0.5, 2) and a random shift.
+fn random_affine<const N: usize>(r: &mut TestRng, shape: usize) -> (Matrix<N>, Vector<N>) {
+    if shape == 0 {
+        return (crate::linalg::identity(), [0.0; N]);
+    }
+    let q = random_rotation::<N>(r);
+    let d: Vector<N> = std::array::from_fn(|_| r.random_range(0.5..2.0));
+    (
+        std::array::from_fn(|i| std::array::from_fn(|j| q[i][j] * d[j])),
+        random_vector(r, 3.0),
+    )
+}
+
+/// A random unit vector (uniform direction).
+fn random_unit<const N: usize>(r: &mut TestRng) -> Vector<N> {
+    loop {
+        let v = random_vector::<N>(r, 1.0);
+        let l = norm(&v);
+        if l > 0.1 && l <= 1.0 {
+            return scale(&v, 1.0 / l);
+        }
+    }
 }
 
 /// Brute force over all simplices: the minimum of (t, id) over accepted hits.

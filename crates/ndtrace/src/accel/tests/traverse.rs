@@ -313,16 +313,7 @@ fn closed_mesh_is_watertight<const N: usize>() {
     for shape in 0..2 {
         // 0: the cube [−1, 1]^N itself (box faces on the mesh, zero direction components);
         // 1: a random affine image of it.
-        let (m, shift): (Matrix<N>, Vector<N>) = if shape == 0 {
-            (crate::linalg::identity(), [0.0; N])
-        } else {
-            let q = random_rotation::<N>(&mut r);
-            let d: Vector<N> = std::array::from_fn(|_| r.random_range(0.5..2.0));
-            (
-                std::array::from_fn(|i| std::array::from_fn(|j| q[i][j] * d[j])),
-                random_vector(&mut r, 3.0),
-            )
-        };
+        let (m, shift) = random_affine::<N>(&mut r, shape);
         let map = |g: &[i64; N], den: f64| -> Vector<N> {
             let x: Vector<N> = std::array::from_fn(|i| 2.0 * g[i] as f64 / (den * k as f64) - 1.0);
             add(&mat_vec(&m, &x), &shift)
@@ -366,16 +357,6 @@ fn closed_mesh_is_watertight<const N: usize>() {
                 );
                 assert!(bvh.any_hit(&ray, 0.0, f64::INFINITY, |_| true, 0..0));
             }
-        }
-    }
-}
-
-fn random_unit<const N: usize>(r: &mut TestRng) -> Vector<N> {
-    loop {
-        let v = random_vector::<N>(r, 1.0);
-        let l = norm(&v);
-        if l > 0.1 && l <= 1.0 {
-            return scale(&v, 1.0 / l);
         }
     }
 }
