@@ -395,19 +395,7 @@ impl<const N: usize> Bvh<N> {
         if len == 0 {
             return empty;
         }
-        let root = &nodes[0];
-        let reach = (0..N)
-            .flat_map(|a| (0..NODE_WIDTH).map(move |l| (a, l)))
-            .filter(|&(_, l)| root.child[l] != EMPTY_SLOT)
-            .map(|(a, l)| {
-                f64::from(root.bounds[0][a][l].abs()).max(f64::from(root.bounds[1][a][l].abs()))
-            })
-            .fold(0.0, f64::max);
-        let reach = if reach.is_finite() {
-            reach
-        } else {
-            f64::from(f32::MAX)
-        };
+        let reach = nodes[0].reach();
         Bvh {
             nodes,
             blocks,

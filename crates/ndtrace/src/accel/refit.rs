@@ -9,7 +9,7 @@
 use super::build::BOX_PAD;
 use super::cell::CellGeometry;
 use super::simplex::{simplex_bounds, PreparedSimplex};
-use super::tree::{f32_down, f32_up, Bvh, CELL_TAG, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH};
+use super::tree::{f32_down, f32_up, Bvh, WideNode, CELL_TAG, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH};
 use crate::linalg::Vector;
 use rayon::prelude::*;
 
@@ -136,20 +136,7 @@ impl<const N: usize> Bvh<N> {
                 }
             }
         }
-        let reach = nodes.first().map_or(0.0, |root| {
-            let r = (0..N)
-                .flat_map(|a| (0..NODE_WIDTH).map(move |l| (a, l)))
-                .filter(|&(_, l)| root.child[l] != EMPTY_SLOT)
-                .map(|(a, l)| {
-                    f64::from(root.bounds[0][a][l].abs()).max(f64::from(root.bounds[1][a][l].abs()))
-                })
-                .fold(0.0, f64::max);
-            if r.is_finite() {
-                r
-            } else {
-                f64::from(f32::MAX)
-            }
-        });
+        let reach = nodes.first().map_or(0.0, WideNode::reach);
         Some(Bvh {
             nodes,
             blocks,

@@ -38,6 +38,23 @@ pub(super) struct WideNode<const N: usize> {
 }
 
 impl<const N: usize> WideNode<N> {
+    /// The largest |coordinate| of the boxes of its used slots (f32::MAX when not finite): the
+    /// `reach` of a tree whose root this is.
+    pub(super) fn reach(&self) -> f64 {
+        let reach = (0..N)
+            .flat_map(|a| (0..NODE_WIDTH).map(move |l| (a, l)))
+            .filter(|&(_, l)| self.child[l] != EMPTY_SLOT)
+            .map(|(a, l)| {
+                f64::from(self.bounds[0][a][l].abs()).max(f64::from(self.bounds[1][a][l].abs()))
+            })
+            .fold(0.0, f64::max);
+        if reach.is_finite() {
+            reach
+        } else {
+            f64::from(f32::MAX)
+        }
+    }
+
     /// A node with every slot unused.
     pub(super) const EMPTY: Self = WideNode {
         bounds: [
