@@ -111,7 +111,11 @@ def load_toml(
     text: str, name: str = "<string>", base: str | None = None, reader: _MeshReader | None = None
 ) -> CompiledScene: ...
 def load_dict(
-    data: object, name: str = "<dict>", base: str | None = None, reader: _MeshReader | None = None
+    data: object,
+    name: str = "<dict>",
+    base: str | None = None,
+    reader: _MeshReader | None = None,
+    like: CompiledScene | None = None,
 ) -> CompiledScene: ...
 
 # -- meshes ---------------------------------------------------------------------------

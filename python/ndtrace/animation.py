@@ -24,7 +24,7 @@ import numpy as np
 from .composite import composite as _composite, scene_options
 from .files import to_srgb8, write_png
 from .retina import trace
-from .scene import Scene, load_dict
+from .scene import Scene, _reanimated, load_dict
 
 __all__ = ["animate", "frame_scene", "frame_paths", "gif_frame_ms", "render_frame",
            "GIF_MEMORY_LIMIT"]
@@ -49,7 +49,7 @@ def _table(scene: Scene, animation: dict | None, frames: int | None) -> Scene:
             raise ValueError(f"frames: expected a positive integer, got {frames!r}")
         table["frames"] = int(frames)
     data["animation"] = table
-    return load_dict(data, base=scene._base)
+    return _reanimated(scene, data)
 
 
 def frame_scene(scene: Scene, k: int) -> Scene:

@@ -316,6 +316,14 @@ def load_toml(text: str, *, name: str = "<string>", base: str | None = None) -> 
     return Scene._from_compiled(_ndtrace.load_toml(text, name, base, _scene_reader), base)
 
 
+def _reanimated(scene: Scene, data: dict) -> Scene:
+    """``data`` — ``scene``'s description with another ``[animation]`` table — as a scene that
+    shares ``scene``'s build when nothing else differs (else built anew, as :func:`load_dict`)."""
+    compiled = _ndtrace.load_dict(_plain_scene(data, "<dict>"), "<dict>", scene._base, _scene_reader,
+                                  scene.compiled())
+    return Scene._from_compiled(compiled, scene._base)
+
+
 def load_dict(data: dict, *, base: str | None = None, name: str = "<dict>") -> Scene:
     """Loads a scene from a dict shaped like the TOML format; arrays may be numpy arrays.
     Relative mesh files resolve against ``base`` (default: the current directory); errors are

@@ -389,15 +389,17 @@ fn load_toml(
 }
 
 /// Builds a scene from plain Python data (dicts, lists, numbers, strings); errors are named
-/// `name`; relative files resolve against `base`.
+/// `name`; relative files resolve against `base`. With `like`, a description that differs from
+/// `like`'s at most in its `[animation]` table shares `like`'s build (`scene::reanimated`).
 #[pyfunction]
-#[pyo3(signature = (data, name="<dict>", base=None, reader=None))]
+#[pyo3(signature = (data, name="<dict>", base=None, reader=None, like=None))]
 fn load_dict(
     py: Python<'_>,
     data: &Bound<'_, PyAny>,
     name: &str,
     base: Option<PathBuf>,
     reader: Option<Bound<'_, PyAny>>,
+    like: Option<PyRef<'_, CompiledScene>>,
 ) -> PyResult<CompiledScene> {
     let reader = PyMeshReader::new(reader);
     let (data, arrays) = crate::arrays::take_arrays(data, name)?;
@@ -410,6 +412,12 @@ fn load_dict(
         })
     })?;
     crate::arrays::put_arrays(&mut desc, arrays);
+    if let Some(like) = like {
+        if let Some(shared) = scene::reanimated(&desc, &like.desc, &like.scene, name) {
+            let scene = shared.map_err(to_py_err)?;
+            return Ok(CompiledScene { desc, scene });
+        }
+    }
     let scene = py.detach(|| {
         guarded("load_dict", || {
             scene::build_desc_with(&desc, name, base.as_deref(), as_reader(&reader))

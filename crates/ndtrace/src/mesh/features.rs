@@ -23,6 +23,10 @@
 //! differently) glue their ridges together: every simplex that shares any ridge with a
 //! zero-volume simplex becomes a neighbour of the others across it, so the zero-volume simplex
 //! neither hides a crease nor invents a boundary.
+//!
+//! Most of the work — welding and sorting every ridge incidence — depends only on which
+//! vertices the simplices share, not on where the vertices are: [`Ridges`] keeps it, so that a
+//! mesh that moves (an animation's frames) finds its edges again from its new normals alone.
 
 use super::find;
 use crate::linalg::{dot, norm, scale, sub, Vector};
@@ -48,64 +52,265 @@ pub fn feature_edges<const N: usize>(
     simplices: &[[u32; N]],
     angle_degrees: f64,
 ) -> NdResult<Vec<[u32; 2]>> {
-    if !(0.0..=90.0).contains(&angle_degrees) {
-        return Err(crate::NdError::Value {
-            arg: "angle".into(),
-            message: format!("must be in [0, 90] degrees, got {angle_degrees}"),
-        });
+    check_angle(angle_degrees)?;
+    Ridges::new(vertices, simplices)?.feature_edges(vertices, angle_degrees)
+}
+
+fn check_angle(angle_degrees: f64) -> NdResult<()> {
+    if (0.0..=90.0).contains(&angle_degrees) {
+        return Ok(());
     }
-    for (s, simplex) in simplices.iter().enumerate() {
-        if let Some(&bad) = simplex.iter().find(|&&v| v as usize >= vertices.len()) {
+    Err(crate::NdError::Value {
+        arg: "angle".into(),
+        message: format!("must be in [0, 90] degrees, got {angle_degrees}"),
+    })
+}
+
+/// The part of [`feature_edges`] that depends only on which vertices the simplices share: the
+/// welded simplices and every ridge with the simplices around it. It is most of the work (a
+/// sort of all N·S ridge incidences), and it does not change while a mesh moves, so the frames
+/// of an animation that turns an object find their feature edges from it again
+/// ([`Ridges::fits`]), with the normals of the moved vertices: the same edges as a search from
+/// scratch, bit for bit, because the welding is checked and every decision that depends on
+/// coordinates is made again.
+#[derive(Debug)]
+pub struct Ridges<const N: usize> {
+    /// Per vertex, the smallest id of a vertex with the same coordinates.
+    weld: Vec<u32>,
+    /// The simplices with welded ids.
+    simplices: Vec<[u32; N]>,
+    /// Every (ridge of N − 1 distinct vertices, simplex) incidence as `simplex·N + corner left
+    /// out`, grouped by ridge (groups in the order of their sorted vertex ids, each by simplex).
+    incidences: Vec<u32>,
+    /// Where each ridge's group starts in `incidences`, and the end.
+    starts: Vec<u32>,
+}
+
+impl<const N: usize> Ridges<N> {
+    /// The ridges of `(vertices, simplices)` (errors name a simplex with an id out of range, a
+    /// vertex that is not finite, or a mesh too large to number its incidences in 32 bits).
+    pub fn new(vertices: &[Vector<N>], simplices: &[[u32; N]]) -> NdResult<Self> {
+        for (s, simplex) in simplices.iter().enumerate() {
+            if let Some(&bad) = simplex.iter().find(|&&v| v as usize >= vertices.len()) {
+                return Err(crate::NdError::Value {
+                    arg: "simplices".into(),
+                    message: format!(
+                        "simplex {s} names vertex {bad}, but there are {} vertices",
+                        vertices.len()
+                    ),
+                });
+            }
+        }
+        if simplices.len() > u32::MAX as usize / N {
             return Err(crate::NdError::Value {
                 arg: "simplices".into(),
                 message: format!(
-                    "simplex {s} names vertex {bad}, but there are {} vertices",
-                    vertices.len()
+                    "{} simplices: feature edges are found for at most {} in {N}D",
+                    simplices.len(),
+                    u32::MAX as usize / N
                 ),
             });
         }
+        check_finite(vertices)?;
+        let weld = weld(vertices);
+        let simplices = welded(&weld, simplices);
+        if N == 2 {
+            return Ok(Ridges {
+                weld,
+                simplices,
+                incidences: Vec::new(),
+                starts: vec![0],
+            });
+        }
+        // Every (ridge, simplex) incidence, grouped by ridge.
+        let mut inc: Vec<(Key, u32)> = simplices
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(s, simplex)| {
+                (0..N).filter_map(move |skip| {
+                    let k = key_of((0..N).filter(|&j| j != skip).map(|j| simplex[j]));
+                    distinct(&k, N - 1).then_some((k, (s * N + skip) as u32))
+                })
+            })
+            .collect();
+        inc.par_sort_unstable();
+        let mut starts = Vec::new();
+        for (i, w) in inc.iter().enumerate() {
+            if i == 0 || inc[i - 1].0 != w.0 {
+                starts.push(i as u32);
+            }
+        }
+        starts.push(inc.len() as u32);
+        Ok(Ridges {
+            weld,
+            simplices,
+            incidences: inc.into_iter().map(|(_, i)| i).collect(),
+            starts,
+        })
     }
-    if let Some(v) = vertices
+
+    /// Whether these are the ridges of `(vertices, simplices)` too: the vertices weld alike and
+    /// the welded simplices are the same (true for a mesh moved by any map that keeps its
+    /// distinct vertices distinct, such as a rotation).
+    pub fn fits(&self, vertices: &[Vector<N>], simplices: &[[u32; N]]) -> bool {
+        vertices.len() == self.weld.len()
+            && simplices.len() == self.simplices.len()
+            && simplices
+                .iter()
+                .all(|s| s.iter().all(|&v| (v as usize) < vertices.len()))
+            && weld(vertices) == self.weld
+            && welded(&self.weld, simplices) == self.simplices
+    }
+
+    /// The feature edges of the mesh with these ridges and the coordinates `vertices` (see
+    /// [`feature_edges`]; the caller makes sure the ridges [`fit`](Self::fits)).
+    pub fn feature_edges(
+        &self,
+        vertices: &[Vector<N>],
+        angle_degrees: f64,
+    ) -> NdResult<Vec<[u32; 2]>> {
+        check_angle(angle_degrees)?;
+        check_finite(vertices)?;
+        let cos_angle = angle_degrees.to_radians().cos();
+        if N == 2 {
+            let mut out: Vec<[u32; 2]> = self
+                .simplices
+                .iter()
+                .filter(|s| s[0] != s[1])
+                .map(|s| [s[0].min(s[1]), s[0].max(s[1])])
+                .collect();
+            out.sort_unstable();
+            out.dedup();
+            return Ok(out);
+        }
+        let normals: Vec<Option<Vector<N>>> = self
+            .simplices
+            .par_iter()
+            .map(|s| {
+                let pts: [Vector<N>; N] = std::array::from_fn(|k| vertices[s[k] as usize]);
+                unit_normal(&pts)
+            })
+            .collect();
+        let mut faces = self.creases(&normals, cos_angle);
+        // Down the face dimensions: faces of `m + 1` vertices from those of `m + 2`.
+        for m in (2..N - 1).rev() {
+            faces = lower_features(vertices, &faces, m, cos_angle);
+        }
+        let mut out: Vec<[u32; 2]> = faces.iter().map(|k| [k[0], k[1]]).collect();
+        out.sort_unstable();
+        out.dedup();
+        Ok(out)
+    }
+
+    fn ridge_count(&self) -> usize {
+        self.starts.len() - 1
+    }
+
+    /// The incidences of ridge `r`.
+    fn group(&self, r: usize) -> &[u32] {
+        &self.incidences[self.starts[r] as usize..self.starts[r + 1] as usize]
+    }
+
+    /// The sorted vertex ids of ridge `r`.
+    fn key(&self, r: usize) -> Key {
+        let i = self.incidences[self.starts[r] as usize] as usize;
+        let (simplex, skip) = (&self.simplices[i / N], i % N);
+        key_of((0..N).filter(|&j| j != skip).map(|j| simplex[j]))
+    }
+
+    /// Step 1: the crease ridges (keys of N−1 vertices).
+    fn creases(&self, normals: &[Option<Vector<N>>], cos_angle: f64) -> Vec<Key> {
+        let normal = |i: u32| normals[i as usize / N];
+        // Whether simplices (with volume) around one ridge or glued class meet at a crease.
+        let crease = |owners: &[u32]| {
+            owners.len() < 2
+                || owners.iter().enumerate().any(|(i, &a)| {
+                    let na = normals[a as usize].unwrap();
+                    owners[i + 1..]
+                        .iter()
+                        .any(|&b| dot(&na, &normals[b as usize].unwrap()).abs() < cos_angle)
+                })
+        };
+        if normals.iter().all(Option::is_some) {
+            // Nothing glued: a ridge's owners are its group (a simplex with volume has
+            // distinct vertices, so it has each ridge once).
+            return (0..self.ridge_count())
+                .into_par_iter()
+                .filter(|&r| {
+                    let owners: Vec<u32> = self.group(r).iter().map(|&i| i / N as u32).collect();
+                    crease(&owners)
+                })
+                .map(|r| self.key(r))
+                .collect();
+        }
+        // Zero-volume simplices glue their ridges into one class.
+        let mut parent: Vec<u32> = (0..self.ridge_count() as u32).collect();
+        let mut first_ridge: HashMap<u32, u32> = HashMap::new();
+        for r in 0..self.ridge_count() {
+            for &i in self.group(r) {
+                if normal(i).is_none() {
+                    let s = i / N as u32;
+                    match first_ridge.get(&s) {
+                        None => {
+                            first_ridge.insert(s, r as u32);
+                        }
+                        Some(&r0) => {
+                            let (a, b) = (find(&mut parent, r0), find(&mut parent, r as u32));
+                            parent[a.max(b) as usize] = a.min(b);
+                        }
+                    }
+                }
+            }
+        }
+        // The simplices with volume around each class.
+        let mut owners: Vec<(u32, u32)> = Vec::with_capacity(self.incidences.len());
+        for r in 0..self.ridge_count() {
+            let class = find(&mut parent, r as u32);
+            for &i in self.group(r) {
+                if normal(i).is_some() {
+                    owners.push((class, i / N as u32));
+                }
+            }
+        }
+        owners.par_sort_unstable();
+        owners.dedup();
+        let mut is_crease = vec![false; self.ridge_count()];
+        let mut has_owner = vec![false; self.ridge_count()];
+        for group in owners.chunk_by(|a, b| a.0 == b.0) {
+            let class = group[0].0 as usize;
+            has_owner[class] = true;
+            let ids: Vec<u32> = group.iter().map(|&(_, s)| s).collect();
+            is_crease[class] = crease(&ids);
+        }
+        (0..self.ridge_count())
+            .filter(|&r| {
+                let class = find(&mut parent, r as u32) as usize;
+                has_owner[class] && is_crease[class]
+            })
+            .map(|r| self.key(r))
+            .collect()
+    }
+}
+
+fn check_finite<const N: usize>(vertices: &[Vector<N>]) -> NdResult<()> {
+    match vertices
         .iter()
         .position(|v| v.iter().any(|x| !x.is_finite()))
     {
-        return Err(crate::NdError::Value {
+        None => Ok(()),
+        Some(v) => Err(crate::NdError::Value {
             arg: "vertices".into(),
             message: format!("vertex {v} is not finite: {:?}", vertices[v]),
-        });
+        }),
     }
-    let cos_angle = angle_degrees.to_radians().cos();
-    let weld = weld(vertices);
-    let simplices: Vec<[u32; N]> = simplices
+}
+
+/// `simplices` with every id replaced by its welded one.
+fn welded<const N: usize>(weld: &[u32], simplices: &[[u32; N]]) -> Vec<[u32; N]> {
+    simplices
         .iter()
         .map(|s| std::array::from_fn(|k| weld[s[k] as usize]))
-        .collect();
-    if N == 2 {
-        let mut out: Vec<[u32; 2]> = simplices
-            .iter()
-            .filter(|s| s[0] != s[1])
-            .map(|s| [s[0].min(s[1]), s[0].max(s[1])])
-            .collect();
-        out.sort_unstable();
-        out.dedup();
-        return Ok(out);
-    }
-    let normals: Vec<Option<Vector<N>>> = simplices
-        .par_iter()
-        .map(|s| {
-            let pts: [Vector<N>; N] = std::array::from_fn(|k| vertices[s[k] as usize]);
-            unit_normal(&pts)
-        })
-        .collect();
-    let mut faces = creases(&simplices, &normals, cos_angle);
-    // Down the face dimensions: faces of `m + 1` vertices from those of `m + 2`.
-    for m in (2..N - 1).rev() {
-        faces = lower_features(vertices, &faces, m, cos_angle);
-    }
-    let mut out: Vec<[u32; 2]> = faces.iter().map(|k| [k[0], k[1]]).collect();
-    out.sort_unstable();
-    out.dedup();
-    Ok(out)
+        .collect()
 }
 
 /// For each vertex, the smallest id of a vertex with the same coordinates (−0 = +0).
@@ -151,80 +356,6 @@ fn key_of(ids: impl Iterator<Item = u32>) -> Key {
 /// Whether a key of `len` vertices names `len` distinct vertices.
 fn distinct(k: &Key, len: usize) -> bool {
     k[..len].windows(2).all(|w| w[0] != w[1])
-}
-
-/// Step 1: the crease ridges (keys of N−1 vertices).
-fn creases<const N: usize>(
-    simplices: &[[u32; N]],
-    normals: &[Option<Vector<N>>],
-    cos_angle: f64,
-) -> Vec<Key> {
-    // Every (ridge, simplex) incidence, grouped by ridge.
-    let mut inc: Vec<(Key, u32)> = simplices
-        .par_iter()
-        .enumerate()
-        .flat_map_iter(|(s, simplex)| {
-            (0..N).filter_map(move |skip| {
-                let k = key_of((0..N).filter(|&j| j != skip).map(|j| simplex[j]));
-                distinct(&k, N - 1).then_some((k, s as u32))
-            })
-        })
-        .collect();
-    inc.par_sort_unstable();
-    let mut ridges: Vec<Key> = Vec::new();
-    let mut ridge_of = Vec::with_capacity(inc.len());
-    for (k, _) in &inc {
-        if ridges.last() != Some(k) {
-            ridges.push(*k);
-        }
-        ridge_of.push(ridges.len() as u32 - 1);
-    }
-    // Zero-volume simplices glue their ridges into one class.
-    let mut parent: Vec<u32> = (0..ridges.len() as u32).collect();
-    let mut first_ridge: HashMap<u32, u32> = HashMap::new();
-    for (i, &(_, s)) in inc.iter().enumerate() {
-        if normals[s as usize].is_none() {
-            let r = ridge_of[i];
-            match first_ridge.get(&s) {
-                None => {
-                    first_ridge.insert(s, r);
-                }
-                Some(&r0) => {
-                    let (a, b) = (find(&mut parent, r0), find(&mut parent, r));
-                    parent[a.max(b) as usize] = a.min(b);
-                }
-            }
-        }
-    }
-    // The simplices with volume around each class.
-    let mut owners: Vec<(u32, u32)> = Vec::with_capacity(inc.len());
-    for (i, &(_, s)) in inc.iter().enumerate() {
-        if normals[s as usize].is_some() {
-            owners.push((find(&mut parent, ridge_of[i]), s));
-        }
-    }
-    owners.par_sort_unstable();
-    owners.dedup();
-    let mut is_crease = vec![false; ridges.len()];
-    let mut has_owner = vec![false; ridges.len()];
-    for group in owners.chunk_by(|a, b| a.0 == b.0) {
-        let class = group[0].0 as usize;
-        has_owner[class] = true;
-        is_crease[class] = group.len() < 2
-            || group.iter().enumerate().any(|(i, a)| {
-                let na = normals[a.1 as usize].unwrap();
-                group[i + 1..]
-                    .iter()
-                    .any(|b| dot(&na, &normals[b.1 as usize].unwrap()).abs() < cos_angle)
-            });
-    }
-    (0..ridges.len())
-        .filter(|&r| {
-            let class = find(&mut parent, r as u32) as usize;
-            has_owner[class] && is_crease[class]
-        })
-        .map(|r| ridges[r])
-        .collect()
 }
 
 /// Step 2: the feature faces of `m` vertices, given those of `m + 1` vertices.

@@ -185,3 +185,71 @@ fn bad_input_names_the_argument() {
         .to_string();
     assert!(err.contains("vertices") && err.contains('0'), "{err}");
 }
+
+/// Ridges found once give a moved mesh's feature edges bit for bit as a search from scratch
+/// (rotations, a uniform scale and a shear, which changes the angles; zero-volume simplices and
+/// unwelded vertices included), and do not fit a mesh whose welding or simplices changed.
+fn ridges_of_a_moved_mesh<const N: usize>() {
+    let mut r = rng(N as u64 + 900);
+    let mut meshes = vec![cross_polytope::<N>()];
+    if N <= 6 {
+        meshes.extend([hypercube::<N>(), unwelded(&hypercube::<N>())]);
+    }
+    if N == 3 || N == 4 {
+        meshes.push(sphere::<N>(2));
+    }
+    if (3..=6).contains(&N) {
+        // A zero-volume simplex gluing ridges: the cube's first simplex repeated flat.
+        let mut glued = hypercube::<N>();
+        let first = glued.simplices[0];
+        glued
+            .simplices
+            .push(std::array::from_fn(|k| first[k.min(N - 2)]));
+        meshes.push(glued);
+    }
+    for mesh in &meshes {
+        let ridges = Ridges::new(&mesh.vertices, &mesh.simplices).unwrap();
+        for step in 0..4 {
+            let m: crate::linalg::Matrix<N> = match step {
+                0 => crate::linalg::identity(),
+                1 | 2 => random_rotation::<N>(&mut r),
+                _ => std::array::from_fn(|i| {
+                    std::array::from_fn(|j| {
+                        f64::from(u8::from(i == j)) + 0.7 * f64::from(u8::from(j == i + 1))
+                    })
+                }),
+            };
+            let scale = if step == 2 { 3.5 } else { 1.0 };
+            let moved: Vec<_> = mesh
+                .vertices
+                .iter()
+                .map(|v| crate::linalg::scale(&mat_vec(&m, v), scale))
+                .collect();
+            assert!(ridges.fits(&moved, &mesh.simplices), "N = {N} step {step}");
+            for angle in [1.0, 20.0, 50.0] {
+                assert_eq!(
+                    ridges.feature_edges(&moved, angle).unwrap(),
+                    feature_edges(&moved, &mesh.simplices, angle).unwrap(),
+                    "N = {N} step {step} angle {angle}"
+                );
+            }
+        }
+        // Two distinct vertices made one: the welding changed.
+        let mut merged = mesh.vertices.clone();
+        merged[1] = merged[0];
+        assert!(!ridges.fits(&merged, &mesh.simplices), "N = {N}");
+        // Other simplices, fewer vertices, ids out of range: no fit (and no panic).
+        let mut other = mesh.simplices.clone();
+        other[0].swap(0, 1);
+        assert!(!ridges.fits(&mesh.vertices, &other));
+        assert!(!ridges.fits(&mesh.vertices[1..], &mesh.simplices));
+        let mut out_of_range = mesh.simplices.clone();
+        out_of_range[0][0] = mesh.vertices.len() as u32;
+        assert!(!ridges.fits(&mesh.vertices, &out_of_range));
+    }
+}
+
+#[test]
+fn ridges_found_once_give_the_feature_edges_of_the_moved_mesh() {
+    crate::testutil::for_each_dim!(ridges_of_a_moved_mesh);
+}

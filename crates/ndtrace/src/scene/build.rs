@@ -122,7 +122,7 @@ pub struct Scene<const N: usize> {
     /// Warnings for the user (e.g. skipped degenerate simplices).
     pub warnings: Vec<String>,
     /// The objects' feature edges, found on first use (shared like the BVH).
-    pub(crate) edge_cache: Arc<crate::edges::EdgeCache>,
+    pub(crate) edge_cache: Arc<crate::edges::EdgeCache<N>>,
 }
 
 /// The `[composite]` options `composite` checked against the retina of `camera`.
@@ -899,9 +899,7 @@ impl<const N: usize> Scene<N> {
     /// scene's (orientation and degeneracy do not change under the transforms a build applies).
     pub(crate) fn moved(&self, desc: &SceneDesc) -> Option<R<Scene<N>>> {
         // Objects read from files (meshes and elevation fields) would be read again: build anew.
-        let from_file =
-            |o: &ObjectDesc| o.file.is_some() || matches!(o.field, Some(FieldDesc::File(_)));
-        if desc.objects.iter().any(from_file) {
+        if desc.objects.iter().any(ObjectDesc::reads_file) {
             return None;
         }
         let Parts {
@@ -940,6 +938,10 @@ impl<const N: usize> Scene<N> {
             );
         }
         let extent = extent_of(&objects, &offsets, &self.normal_slots);
+        let edge_cache = Arc::new(
+            self.edge_cache
+                .moved(|o| objects[o].mesh == self.objects[o].mesh),
+        );
         Some(Ok(Scene {
             camera,
             objects: Arc::new(objects),
@@ -953,7 +955,7 @@ impl<const N: usize> Scene<N> {
             skipped_degenerate: self.skipped_degenerate,
             extent,
             warnings: self.warnings.clone(),
-            edge_cache: Arc::default(),
+            edge_cache,
         }))
     }
 }

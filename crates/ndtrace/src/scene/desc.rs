@@ -64,6 +64,43 @@ pub struct SceneDesc {
     pub animation: Option<AnimationDesc>,
 }
 
+impl SceneDesc {
+    /// Whether `self` and `other` are equal but for their `[animation]` tables.
+    pub fn same_but_animation(&self, other: &SceneDesc) -> bool {
+        let SceneDesc {
+            dim,
+            background,
+            ambient,
+            camera,
+            lights,
+            objects,
+            render,
+            composite,
+            animation: _,
+        } = self;
+        (
+            dim, background, ambient, camera, lights, objects, render, composite,
+        ) == (
+            &other.dim,
+            &other.background,
+            &other.ambient,
+            &other.camera,
+            &other.lights,
+            &other.objects,
+            &other.render,
+            &other.composite,
+        )
+    }
+}
+
+impl ObjectDesc {
+    /// Whether the object is read from a file (a mesh file or an elevation field's file), which
+    /// a build reads again.
+    pub fn reads_file(&self) -> bool {
+        self.file.is_some() || matches!(self.field, Some(FieldDesc::File(_)))
+    }
+}
+
 /// `[animation]`: frames in which a rotation — one of `sweep`, `slerp` or `rolling` — moves the
 /// target from its place in the scene. Frame k of K sits at t = k/(K−1) (t = k/K when
 /// `periodic`, so that a full turn loops without a repeated frame).

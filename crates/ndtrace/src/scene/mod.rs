@@ -232,6 +232,31 @@ pub fn reused_frame(
     )
 }
 
+/// `desc` built by sharing `built`, the build of `old`, when the two descriptions differ at
+/// most in their `[animation]` tables (a build only checks that table; it is checked here the
+/// same way) and no object is read from a file (a build would read it again); `None`
+/// otherwise: build `desc` then. `ndtrace.animate` gives a scene another table or frame count
+/// this way without building it again.
+pub fn reanimated(
+    desc: &SceneDesc,
+    old: &SceneDesc,
+    built: &AnyScene,
+    name: &str,
+) -> Option<NdResult<AnyScene>> {
+    if !desc.same_but_animation(old) || desc.objects.iter().any(desc::ObjectDesc::reads_file) {
+        return None;
+    }
+    let checked = match &desc.animation {
+        None => Ok(()),
+        Some(a) => with_scene!(built, _s, N => animation::check::<N>(a, desc.objects.len())),
+    };
+    Some(
+        checked
+            .map(|()| with_scene!(built, s, _N => s.clone().into_any()))
+            .map_err(|e| locate(&Source::Unlocated(name), None, e)),
+    )
+}
+
 /// Serializes a description as TOML (the inverse of [`load_toml_str`] for the description).
 pub fn to_toml(desc: &SceneDesc) -> NdResult<String> {
     toml::to_string(desc).map_err(|e| NdError::Value {
@@ -691,6 +716,48 @@ transform = [{ scale = 0.5 }, { rotate = { quaternions = [[0.6, 0, 0.8, 0], [0.5
     }
 
     #[test]
+    fn another_animation_table_shares_the_build() {
+        let text = "dim = 4\n[camera]\nposition = [0.6, 0.9, 1.3, 3.5]\nlook_at = [0, 0, 0, 0]\n\
+                    up = [[0, 1, 0, 0], [0, 0, 1, 0]]\nfov = 50\nresolution = 8\n\
+                    [[objects]]\nshape = \"hypercube\"\n";
+        let (old, built) = load_toml_str(text, "a.toml", None).unwrap();
+        let mut desc = old.clone();
+        let table = "[animation]\nframes = 5\ntarget = [0]\nsweep = { plane = [0, 3], degrees = [0, 90] }\n";
+        desc.animation = load_toml_str(&format!("{text}{table}"), "a.toml", None)
+            .unwrap()
+            .0
+            .animation;
+        let shared = reanimated(&desc, &old, &built, "a.toml").unwrap().unwrap();
+        match (&built, &shared) {
+            (AnyScene::D4(a), AnyScene::D4(b)) => {
+                assert!(Arc::ptr_eq(&a.bvh, &b.bvh) && Arc::ptr_eq(&a.objects, &b.objects))
+            }
+            _ => panic!("dim 4"),
+        }
+        assert_eq!(
+            retina_bits(&shared),
+            retina_bits(&build_any(&desc, None, None).unwrap())
+        );
+        // The table is checked as a build checks it.
+        let mut bad = desc.clone();
+        bad.animation.as_mut().unwrap().target = desc::AnimationTarget::Objects(vec![3]);
+        let err = reanimated(&bad, &old, &built, "a.toml")
+            .unwrap()
+            .err()
+            .unwrap();
+        let want = build_desc(&bad, "a.toml", None).err().unwrap().to_string();
+        assert_eq!(err.to_string(), want);
+        assert!(want.contains("animation.target[0]"), "{want}");
+        // Anything else changed, or an object read from a file: build anew.
+        let mut other = desc.clone();
+        other.camera.fov = Some(40.0);
+        assert!(reanimated(&other, &old, &built, "a.toml").is_none());
+        let mut filed = old.clone();
+        filed.objects[0].file = Some("cube.npz".into());
+        assert!(reanimated(&filed, &filed, &built, "a.toml").is_none());
+    }
+
+    #[test]
     fn object_frames_refit_the_bvh_and_trace_as_the_frames_built_anew() {
         // Frames of an animation that moves objects: the BVH refitted to the moved objects
         // (flat cells included, in 5D) traces bit for bit as the frame's own build; shadows,
@@ -722,6 +789,14 @@ transform = [{ scale = 0.5 }, { rotate = { quaternions = [[0.6, 0, 0.8, 0], [0.5
                 N - 1
             );
             let (desc, scene) = load_toml_str(&text, "obj.toml", None).unwrap();
+            // The base scene's feature edges: the frames share its objects' ridges, and keep
+            // the edges of the objects they do not move.
+            let unmoved: Vec<usize> = if target == "[1]" { vec![0, 2] } else { vec![] };
+            let ridges = with_scene!(&scene, s, _N => {
+                crate::edges::edge_segments(s, 20.0).unwrap();
+                s.edge_cache.contents().1
+            });
+            assert_eq!(ridges.len(), 3);
             let bits = retina_bits;
             let mut frames = Vec::new();
             for k in 0..4 {
@@ -729,9 +804,15 @@ transform = [{ scale = 0.5 }, { rotate = { quaternions = [[0.6, 0, 0.8, 0], [0.5
                 let built = build_any(&frame, None, None).unwrap();
                 let traced = bits(&refit);
                 assert_eq!(traced, bits(&built), "N={N} {target} frame {k}");
+                // Frame 0 turns by 0°: every object keeps its vertices and its edges.
+                let kept = if k == 0 {
+                    vec![0, 1, 2]
+                } else {
+                    unmoved.clone()
+                };
                 match (&refit, &built) {
-                    (AnyScene::D4(a), AnyScene::D4(b)) => check_same(a, b),
-                    (AnyScene::D5(a), AnyScene::D5(b)) => check_same(a, b),
+                    (AnyScene::D4(a), AnyScene::D4(b)) => check_same(a, b, &kept, &ridges),
+                    (AnyScene::D5(a), AnyScene::D5(b)) => check_same(a, b, &kept, &ridges),
                     _ => panic!("dim"),
                 }
                 frames.push(traced);
@@ -741,7 +822,22 @@ transform = [{ scale = 0.5 }, { rotate = { quaternions = [[0.6, 0, 0.8, 0], [0.5
                 "the objects move"
             );
         }
-        fn check_same<const N: usize>(refit: &Scene<N>, built: &Scene<N>) {
+        fn check_same<const N: usize>(
+            refit: &Scene<N>,
+            built: &Scene<N>,
+            unmoved: &[usize],
+            ridges: &[(usize, usize)],
+        ) {
+            // Feature edges from the shared ridges (none found again) and the moved
+            // vertices: bit for bit those of the frame built anew.
+            assert_eq!(
+                refit.edge_cache.contents(),
+                (unmoved.to_vec(), ridges.to_vec())
+            );
+            let edges = crate::edges::edge_segments(refit, 20.0).unwrap();
+            assert_eq!(edges, crate::edges::edge_segments(built, 20.0).unwrap());
+            assert!(edges.iter().any(|e| e.object == 0) && edges.iter().any(|e| e.object == 1));
+            assert_eq!(refit.edge_cache.contents().1, ridges, "the ridges fit");
             assert_eq!(refit.bvh.cell_count(), built.bvh.cell_count());
             assert_eq!(refit.extent.to_bits(), built.extent.to_bits());
             assert_eq!(refit.skipped_degenerate, built.skipped_degenerate);
