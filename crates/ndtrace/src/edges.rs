@@ -168,7 +168,8 @@ pub fn edge_segments<const N: usize>(
     scene: &Scene<N>,
     angle_degrees: f64,
 ) -> NdResult<Vec<EdgeSegment<N>>> {
-    let culled = culled(scene);
+    // Found when an object has edges (a smooth mesh has none).
+    let culled_once = std::sync::OnceLock::new();
     let mut out = Vec::new();
     for (o, obj) in scene.objects.iter().enumerate() {
         let edges = scene.edge_cache.feature_edges(
@@ -180,6 +181,7 @@ pub fn edge_segments<const N: usize>(
         if edges.is_empty() {
             continue;
         }
+        let culled = culled_once.get_or_init(|| culled(scene));
         let star = star(obj.mesh.vertices.len(), &obj.mesh.simplices);
         let first = scene.offsets[o];
         let pieces: Vec<Vec<EdgeSegment<N>>> = edges
@@ -193,7 +195,7 @@ pub fn edge_segments<const N: usize>(
                     .chain(&star[j as usize])
                     .map(|&s| first + s)
                     .collect();
-                split_edge(scene, &culled, &near, &a, &b)
+                split_edge(scene, culled, &near, &a, &b)
                     .into_iter()
                     .map(|(s0, s1, visible)| EdgeSegment {
                         a: lerp(&a, &b, s0),

@@ -155,11 +155,11 @@ impl<const N: usize> Ridges<N> {
     pub fn fits(&self, vertices: &[Vector<N>], simplices: &[[u32; N]]) -> bool {
         vertices.len() == self.weld.len()
             && simplices.len() == self.simplices.len()
-            && simplices
-                .iter()
-                .all(|s| s.iter().all(|&v| (v as usize) < vertices.len()))
             && weld(vertices) == self.weld
-            && welded(&self.weld, simplices) == self.simplices
+            && simplices
+                .par_iter()
+                .zip(&self.simplices)
+                .all(|(s, w)| (0..N).all(|k| self.weld.get(s[k] as usize) == Some(&w[k])))
     }
 
     /// The feature edges of the mesh with these ridges and the coordinates `vertices` (see
@@ -221,25 +221,24 @@ impl<const N: usize> Ridges<N> {
     /// Step 1: the crease ridges (keys of N−1 vertices).
     fn creases(&self, normals: &[Option<Vector<N>>], cos_angle: f64) -> Vec<Key> {
         let normal = |i: u32| normals[i as usize / N];
-        // Whether simplices (with volume) around one ridge or glued class meet at a crease.
-        let crease = |owners: &[u32]| {
+        // Whether simplices (with volume) around one ridge or glued class meet at a crease:
+        // `owners` are simplex ids times `per` (plus less than `per`).
+        let crease = |owners: &[u32], per: u32| {
+            let normal = |a: u32| normals[(a / per) as usize].unwrap();
             owners.len() < 2
                 || owners.iter().enumerate().any(|(i, &a)| {
-                    let na = normals[a as usize].unwrap();
+                    let na = normal(a);
                     owners[i + 1..]
                         .iter()
-                        .any(|&b| dot(&na, &normals[b as usize].unwrap()).abs() < cos_angle)
+                        .any(|&b| dot(&na, &normal(b)).abs() < cos_angle)
                 })
         };
         if normals.iter().all(Option::is_some) {
-            // Nothing glued: a ridge's owners are its group (a simplex with volume has
-            // distinct vertices, so it has each ridge once).
+            // Nothing glued: a ridge's owners are its group's simplices (a simplex with volume
+            // has distinct vertices, so it has each ridge once).
             return (0..self.ridge_count())
                 .into_par_iter()
-                .filter(|&r| {
-                    let owners: Vec<u32> = self.group(r).iter().map(|&i| i / N as u32).collect();
-                    crease(&owners)
-                })
+                .filter(|&r| crease(self.group(r), N as u32))
                 .map(|r| self.key(r))
                 .collect();
         }
@@ -280,7 +279,7 @@ impl<const N: usize> Ridges<N> {
             let class = group[0].0 as usize;
             has_owner[class] = true;
             let ids: Vec<u32> = group.iter().map(|&(_, s)| s).collect();
-            is_crease[class] = crease(&ids);
+            is_crease[class] = crease(&ids, 1);
         }
         (0..self.ridge_count())
             .filter(|&r| {
