@@ -4,9 +4,10 @@ Prints, for a 4D mesh of 1.57 M tetrahedra (the boundary of a 4D ball: the 3-sph
 tessellation of ``bench/build.py``, oriented) and a 24-frame orbit of the camera around it at a 64³
 retina: the build (load) time, the time of one trace, and per frame of ``ndtrace.animate`` —
 the camera animation (frames share the BVH: ``frame_scene`` reuses it) and the same orbit
-written as an animation of the object (the world turned the other way; every frame refits the
-BVH to the turned mesh) — and the time of a frame built anew (``load_dict`` of the frame's
-description, median of 3), what the object's frames cost before refitting.
+written as an animation of the object (the world turned the other way; every frame traces the
+scene's BVH, which holds the mesh in its own space, through the frame's turn) — and the time of
+a frame built anew (``load_dict`` of the frame's description, median of 3), what an object's
+frame would cost with a rebuild.
 
 Usage:  python bench/animation.py [--quick]
   --quick   the 3-sphere at 24,576 tetrahedra, 6 frames
@@ -62,7 +63,7 @@ def main() -> None:
     print(f"build {build:.2f} s, one trace {one_trace:.3f} s")
     obj = scene(v, s, "objects", frames)
     with tempfile.TemporaryDirectory() as tmp:
-        for name, sc in (("camera moves (BVH shared)", cam), ("object moves (BVH refitted)", obj)):
+        for name, sc in (("camera moves (BVH shared)", cam), ("object moves (BVH instanced)", obj)):
             start = time.perf_counter()
             ndtrace.animate(sc, os.path.join(tmp, "a.gif"))
             total = time.perf_counter() - start

@@ -316,7 +316,7 @@ def test_the_rolling_example_ends_turned_in_the_controller_plane():
 
 @pytest.mark.parametrize("target", ["camera", "objects", [0]])
 def test_frames_that_reuse_the_bvh_equal_frames_built_anew(target):
-    # A camera animation shares the scene's BVH; one that moves objects refits it.
+    # A camera animation shares the scene's BVH; one that moves objects shares its BVHs too.
     anim = scene4({"frames": 3, "target": target, "center": [0.1, 0, 0, 0.2],
                    "sweep": {"plane": [0, 3], "degrees": [0, 60]}}, res=12)
     for k in range(3):

@@ -1147,6 +1147,25 @@ def test_mesh_index_errors():
                                 "vertex index 7 out of range: the mesh has 3 vertices")
 
 
+def test_singular_transforms_are_errors_naming_the_transform():
+    # Objects are traced in their own space (the ray mapped by the inverse transform), so a
+    # transform must be invertible; a singular one used to flatten the object to nothing.
+    flat = [[1, 0, 0], [0, 1, 0], [0, 0, 0]]
+    objects = [{"shape": "sphere"}, {"shape": "hypercube", "transform": [{"scale": 0.5}, {"matrix": flat}]}]
+    assert dict_error(base_dict(objects=objects)) == (
+        "<dict>: objects[1].transform: is singular (determinant 0): it would flatten the object to nothing")
+    text = GOOD_TOML + '\n[[objects]]\nshape = "hypercube"\ntransform = [{ matrix = [[1, 2, 0], [2, 4, 0], [0, 0, 1]] }]\n'
+    line, col = located(text, "[{ matrix")
+    assert toml_error(text).startswith(f"scene.toml:{line}:{col}: objects[2].transform: is singular (determinant 0)")
+    # A mirror is invertible: the object is drawn, as its mirrored mesh.
+    mirror = base_dict(objects=[{"shape": "hypercube", "transform": [{"scale": [-0.5, 0.5, 0.5]}]}])
+    world = base_dict(objects=[{"shape": "hypercube", "transform": [{"scale": 0.5}]}])
+    a, b = (ndtrace.trace(ndtrace.load_dict(d)) for d in (mirror, world))
+    assert (a.object_id >= 0).sum() > 0
+    np.testing.assert_array_equal(a.object_id, b.object_id)  # the cube is its own mirror image
+    np.testing.assert_allclose(a.rgba, b.rgba, atol=1e-5)
+
+
 def test_camera_errors():
     o = np.eye(3)
     o[2, 1] = 0.1

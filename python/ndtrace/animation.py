@@ -55,8 +55,9 @@ def _table(scene: Scene, animation: dict | None, frames: int | None) -> Scene:
 def frame_scene(scene: Scene, k: int) -> Scene:
     """Frame ``k`` (0-based) of the scene's animation, as a still :class:`Scene`, without a
     rebuild of the BVH: when the animation moves the camera the frame shares the scene's built
-    objects and BVH, when it moves objects the BVH is refitted to them; a frame the refit
-    refuses (or whose objects are read from files) is built from its description."""
+    objects and BVH, when it moves objects it shares the BVHs, which hold each object in its own
+    space, and moves the rays instead; a frame that cannot (objects read from files, a
+    transform turning handedness around) is built from its description."""
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < 2**32:
         raise ValueError(f"k: expected a frame index ≥ 0, got {k!r}")
     compiled = scene.compiled()

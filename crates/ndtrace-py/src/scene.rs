@@ -53,7 +53,7 @@ impl CompiledScene {
 
     /// Number of simplices in the BVH and its memory in bytes.
     fn bvh_stats(&self) -> (usize, usize, usize) {
-        with_scene!(&self.scene, s, _N => (s.bvh.len(), s.bvh.node_count(), s.bvh.memory_bytes()))
+        with_scene!(&self.scene, s, _N => (s.instances.len(), s.instances.node_count(), s.instances.memory_bytes()))
     }
 
     /// The camera section of the description as TOML (stored in retina files).
@@ -159,8 +159,8 @@ impl CompiledScene {
     }
 
     /// Frame `k` of the animation without a build (bit for bit the frame's description built
-    /// anew): sharing this scene's objects and BVH when the camera moves, the BVH refitted to
-    /// the moved objects when objects move; `None` when that is refused (build
+    /// anew): sharing this scene's objects and BVH when the camera moves, its BVHs (which hold
+    /// the objects in their own space) when objects move; `None` when it cannot (build
     /// `animation_frame(k)` then).
     fn reused_frame(&self, k: u32) -> PyResult<Option<CompiledScene>> {
         let frame = guarded("reused_frame", || {

@@ -119,8 +119,8 @@ impl<const N: usize> EdgeCache<N> {
         Ok(edges)
     }
 
-    /// The cache of a scene whose objects are this scene's, moved ([`Scene`]'s refitted
-    /// frames): the feature edges of the objects `unmoved` says are unchanged (same vertices
+    /// The cache of a scene whose objects are this scene's, moved ([`Scene`]'s frames
+    /// that move objects): the feature edges of the objects `unmoved` says are unchanged (same vertices
     /// and simplices) are kept, and the ridges are shared, each checked against its object's
     /// mesh when used.
     pub(crate) fn moved(&self, unmoved: impl Fn(usize) -> bool) -> Self {
@@ -505,7 +505,10 @@ fn split_edge<const N: usize>(
                 }
             }
         };
-        let Some(hit) = scene.bvh.closest_hit(&ray, 0.0, 1.0 - ON_EDGE, accept) else {
+        let Some(hit) = scene
+            .instances
+            .closest_hit(&ray, 0.0, 1.0 - ON_EDGE, accept)
+        else {
             continue;
         };
         if let Some(h) = plane.hidden_by(&simplex(hit.prim), &hit.normal) {

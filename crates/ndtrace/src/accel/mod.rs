@@ -55,11 +55,12 @@
 //! is tested. Hits and ids are those of the simplices alone, bit for bit (the bound is in
 //! `cell.rs`).
 //!
-//! ## 3c. Refitting (`refit.rs`)
-//! [`Bvh::refit`] gives the tree of the same simplices moved (an animation frame that moves
-//! objects) without a build: the blocks are prepared again from the moved vertices, the flat
-//! cells checked again, and the boxes recomputed bottom-up in the tree's shape. Every query
-//! returns the least (t, id), whatever the shape, so it answers as a build would, bit for bit.
+//! ## 3c. Instances (`instance.rs`)
+//! A scene's simplices are prepared in their objects' own space, before the object's
+//! transform: untransformed objects share one tree, each transformed object has its own, and
+//! [`Instances`] maps the world rays into each tree's space ([`ToObject`]) and the normals of
+//! its hits back out. A frame of an animation that moves objects changes only the maps. Every
+//! query still returns the least (t, id) over all the trees.
 //!
 //! ## 4. Traversal (`traverse.rs`)
 //! Nearest-first: the children met are visited in order of entry distance, and subtrees whose
@@ -96,8 +97,8 @@ mod morton;
 mod collapse;
 // 3b. Flat cells: the simplices of a flat facet as one leaf.
 mod cell;
-// 3c. Refitting a tree to moved simplices.
-mod refit;
+// 3c. Instances: trees in their objects' own space, reached by mapped rays.
+mod instance;
 // 4. The queries.
 mod traverse;
 // The memory layout of the trees, the rays prepared for traversal, the kernels, the counters.
@@ -113,6 +114,7 @@ mod tests;
 pub use crate::ray::{Hit, Ray};
 pub(crate) use build::BOX_PAD;
 pub use cell::FlatCell;
+pub use instance::{Instances, ToObject};
 pub use morton::MORTON_MIN;
 pub use packet::PACKET;
 pub use simplex::{simplex_bounds, Bounds, PreparedSimplex, BARY_SLACK};

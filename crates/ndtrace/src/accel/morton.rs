@@ -238,6 +238,21 @@ impl<const N: usize> Bvh<N> {
         domain: Bounds<N>,
         simplex: impl Fn(usize) -> [[f64; N]; N] + Sync,
     ) -> Self {
+        Self::build_morton_with_ids(count, domain, simplex, |i| i as u32)
+    }
+
+    /// [`Bvh::build_morton`] with simplex i given the id `id_of(i)` (increasing in i: the
+    /// tree's id ranges keep their order), so that a tree may hold some of a scene's simplices
+    /// under their global ids.
+    ///
+    /// # Panics
+    /// If `count` is 2³¹ or more.
+    pub fn build_morton_with_ids(
+        count: usize,
+        domain: Bounds<N>,
+        simplex: impl Fn(usize) -> [[f64; N]; N] + Sync,
+        id_of: impl Fn(usize) -> u32 + Sync,
+    ) -> Self {
         assert!(
             count < LEAF_TAG as usize,
             "Bvh::build_morton: too many simplices"
@@ -304,7 +319,10 @@ impl<const N: usize> Bvh<N> {
                 BlockInfo {
                     lo: lo.map(f32_down),
                     hi: hi.map(f32_up),
-                    ids: [first, last],
+                    ids: match first {
+                        u32::MAX => [first, last],
+                        _ => [id_of(first as usize), id_of(last as usize)],
+                    },
                 }
             })
             .collect();
@@ -384,7 +402,7 @@ impl<const N: usize> Bvh<N> {
                     for i in 0..N {
                         block.x0[i][l] = p.x0[i];
                     }
-                    block.ids[l] = id;
+                    block.ids[l] = id_of(id as usize);
                     block.count += 1;
                 }
                 block

@@ -257,12 +257,18 @@ impl<const N: usize> Bvh<N> {
     /// tree does not hold (a degenerate simplex). For trees whose ids are below `count`.
     pub fn id_slots(&self, count: usize) -> Vec<u32> {
         let mut slots = vec![u32::MAX; count];
+        self.fill_id_slots(&mut slots);
+        slots
+    }
+
+    /// Writes the slot of each id this tree holds into `slots[id]` (see [`Bvh::id_slots`]),
+    /// leaving the others: the slots of a scene's trees, which hold disjoint ids, in one list.
+    pub fn fill_id_slots(&self, slots: &mut [u32]) {
         for (b, block) in self.blocks.iter().enumerate() {
             for (l, &id) in block.ids[..block.count as usize].iter().enumerate() {
                 slots[id as usize] = (b * BLOCK_WIDTH + l) as u32;
             }
         }
-        slots
     }
 
     /// The unit normal n̂ of the prepared simplex in `slot` (see [`Bvh::id_slots`]), bit for bit

@@ -104,7 +104,7 @@ impl<const N: usize> GroupTracer<N> {
         // 1. Nearest hits, sized to the rays (no clearing: `closest_hits` writes every element).
         self.hits.resize(self.rays.len(), None);
         scene
-            .bvh
+            .instances
             .closest_hits(&self.rays, 0.0, f64::INFINITY, accept, &mut self.hits);
         self.color.clear();
         self.nearest.clear();
@@ -208,7 +208,7 @@ impl<const N: usize> GroupTracer<N> {
             let mut first = 0;
             for run in requests.chunk_by(|a, b| a.2.skip == b.2.skip) {
                 let all = first..first + run.len();
-                scene.bvh.any_hits(
+                scene.instances.any_hits(
                     &self.shadow_rays[all.clone()],
                     0.0,
                     &self.shadow_tmax[all.clone()],

@@ -27,7 +27,10 @@ fn one_ray_at_a_time<const N: usize>(
             .camera
             .retina_point(cell, &offsets[j * (N - 1)..(j + 1) * (N - 1)], &mut u);
         let ray = scene.camera.ray(&u[..N - 1]);
-        let Some(hit) = scene.bvh.closest_hit(&ray, 0.0, f64::INFINITY, accept) else {
+        let Some(hit) = scene
+            .instances
+            .closest_hit(&ray, 0.0, f64::INFINITY, accept)
+        else {
             continue;
         };
         covered += 1;
@@ -619,7 +622,7 @@ shadows = {shadows}
     crate::with_scene!(&any, s, M => {
         assert_eq!(M, N);
         let ray = s.camera.ray(&[0.0; N][..N - 1]);
-        let hit = s.bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true).unwrap();
+        let hit = s.instances.closest_hit(&ray, 0.0, f64::INFINITY, |_| true).unwrap();
         assert!((hit.t - 3.0).abs() < 1e-12 && s.locate(hit.prim).0 == 0);
         shade_hit(s, &ray, &hit)
     })
@@ -671,9 +674,11 @@ fn scenes_built_with_the_morton_bvh_render_bit_for_bit_as_with_the_sah_one() {
     // map with smooth normals and a colormap, in 3D and 4D.
     fn both<const N: usize>(text: &str) {
         let (desc, _) = load_toml_str(text, "both.toml", None).unwrap();
-        let sah = crate::scene::build::build_using::<N>(&desc, None, None, usize::MAX).unwrap();
-        let mor = crate::scene::build::build_using::<N>(&desc, None, None, 0).unwrap();
-        assert!(sah.bvh != mor.bvh, "the trees should differ");
+        let (sah, mor) = sah_and_morton::<N>(&desc);
+        assert!(
+            sah.instances.trees() != mor.instances.trees(),
+            "the trees should differ"
+        );
         assert_eq!(sah.skipped_degenerate, mor.skipped_degenerate);
         assert_eq!(sah.extent.to_bits(), mor.extent.to_bits());
         assert_eq!(sah.simplex_count(), mor.simplex_count());
@@ -781,10 +786,13 @@ fn n_cubes_whose_facets_are_flat_cells_render_bit_for_bit_as_their_simplices() {
             N - 1
         );
         let (desc, _) = load_toml_str(&text, "cube.toml", None).unwrap();
-        let sah = crate::scene::build::build_using::<N>(&desc, None, None, usize::MAX).unwrap();
-        let mor = crate::scene::build::build_using::<N>(&desc, None, None, 0).unwrap();
-        assert_eq!(sah.bvh.cell_count(), 4 * N, "N={N}: every facet is a cell");
-        assert_eq!(mor.bvh.cell_count(), 0);
+        let (sah, mor) = sah_and_morton::<N>(&desc);
+        assert_eq!(
+            sah.instances.cell_count(),
+            4 * N,
+            "N={N}: every facet is a cell"
+        );
+        assert_eq!(mor.instances.cell_count(), 0);
         for g in 0..sah.simplex_count() as u32 {
             assert_eq!(
                 sah.flat_normal(g),
@@ -964,4 +972,13 @@ fn slabs_traced_apart_and_concatenated_are_the_whole_retina() {
     );
     most = most.max(crate::with_scene!(&parsed(surface), s, _N => check(s)));
     assert!(most >= 3, "the retinas cut into several slabs ({most})");
+}
+
+/// The scene `desc` built with the SAH tree and with the Morton tree.
+fn sah_and_morton<const N: usize>(desc: &crate::scene::SceneDesc) -> (Scene<N>, Scene<N>) {
+    let build = |morton_min| {
+        let min = crate::scene::build::INSTANCE_MIN;
+        crate::scene::build::build_using::<N>(desc, None, None, morton_min, min).unwrap()
+    };
+    (build(usize::MAX), build(0))
 }

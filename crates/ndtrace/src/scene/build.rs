@@ -8,7 +8,9 @@ pub use super::fields::Rgb;
 use super::fields::{coefficient, matrix_rows, mesh_from_rows, rgb, vec_n, R};
 use super::mesh_file::{orientation_warning, read_mesh, MeshReader};
 use super::transform::transform;
-use crate::accel::{simplex_bounds, Bounds, Bvh, FlatCell, PreparedSimplex, MORTON_MIN};
+use crate::accel::{
+    simplex_bounds, Bounds, Bvh, FlatCell, Instances, PreparedSimplex, ToObject, MORTON_MIN,
+};
 use crate::camera::{look_at_orientation, Camera};
 use crate::linalg::{
     add, cofactor_matrix, det, dot, identity, mat_mul, mat_vec, norm, scale, transpose, Matrix,
@@ -107,12 +109,12 @@ pub struct Scene<const N: usize> {
     pub background: Rgb,
     /// Tracing options.
     pub render: RenderDesc,
-    /// BVH over every non-degenerate simplex; hit ids are global ids (see [`Scene::locate`]).
-    /// Shared by the scenes [`Scene::with_camera`] makes.
-    pub bvh: Arc<Bvh<N>>,
-    /// Per global simplex id, where the BVH keeps its prepared simplex (see
-    /// [`Bvh::id_slots`]): the flat normals are read from there, not stored twice.
-    normal_slots: Arc<Vec<u32>>,
+    /// The BVHs over every non-degenerate simplex and the maps taking rays to them: a
+    /// transformed object of [`INSTANCE_MIN`] simplices or more is prepared in its own space
+    /// (before its transform), in a tree of its own; the others share one tree in world space; hit ids are global ids (see
+    /// [`Scene::locate`]), hit normals world normals. The trees are shared by the scenes
+    /// [`Scene::with_camera`] and the frames that move objects make.
+    pub instances: Instances<N>,
     /// First global id of each object's simplices.
     pub offsets: Vec<u32>,
     /// Simplices skipped because they have no volume.
@@ -123,6 +125,9 @@ pub struct Scene<const N: usize> {
     pub warnings: Vec<String>,
     /// The objects' feature edges, found on first use (shared like the BVH).
     pub(crate) edge_cache: Arc<crate::edges::EdgeCache<N>>,
+    /// Fewest simplices a transformed object needs to be traced in its own space
+    /// ([`INSTANCE_MIN`]; tests lower it).
+    pub(crate) instance_min: usize,
 }
 
 /// The `[composite]` options `composite` checked against the retina of `camera`.
@@ -176,16 +181,14 @@ impl<const N: usize> Scene<N> {
 
     /// Number of simplices of all objects (global ids are `0..simplex_count()`).
     pub fn simplex_count(&self) -> usize {
-        self.normal_slots.len()
+        self.instances.slots().len()
     }
 
-    /// Unit flat normal (eq. 6) of global simplex `g`, zero for a degenerate one.
+    /// Unit flat normal (eq. 6) of global simplex `g` in world space, zero for a degenerate
+    /// one: bit for bit the normal of its hits.
     #[inline]
     pub fn flat_normal(&self, g: u32) -> Vector<N> {
-        match self.normal_slots[g as usize] {
-            u32::MAX => [0.0; N],
-            slot => self.bvh.slot_normal(slot),
-        }
+        self.instances.flat_normal(g)
     }
 
     /// Per global simplex id, whether back-face culling removes it for this camera (course
@@ -754,16 +757,18 @@ pub fn build_with<const N: usize>(
     base: Option<&Path>,
     reader: Option<&dyn MeshReader>,
 ) -> R<Scene<N>> {
-    build_using(desc, base, reader, MORTON_MIN)
+    build_using(desc, base, reader, MORTON_MIN, INSTANCE_MIN)
 }
 
 /// [`build_with`], building the BVH with [`Bvh::build_morton`] from `morton_min` simplices
-/// (tests compare both builds on small scenes).
+/// and tracing transformed objects of `instance_min` simplices or more in their own space
+/// (tests compare the builds on small scenes).
 pub(crate) fn build_using<const N: usize>(
     desc: &SceneDesc,
     base: Option<&Path>,
     reader: Option<&dyn MeshReader>,
     morton_min: usize,
+    instance_min: usize,
 ) -> R<Scene<N>> {
     let Parts {
         background,
@@ -772,9 +777,11 @@ pub(crate) fn build_using<const N: usize>(
         lights,
         mut objects,
         surface_warnings,
-    } = parts::<N>(desc, base, reader)?;
+        maps,
+        mut own,
+    } = parts::<N>(desc, base, reader, (instance_min, true))?;
     let r = &desc.render;
-    // 3. Prepared simplices and the BVH.
+    // 3. Prepared simplices and the BVHs.
     let (offsets, total) = offsets_of(&objects);
     if total >= 1 << 31 {
         return Err(PathError::new(
@@ -785,7 +792,6 @@ pub(crate) fn build_using<const N: usize>(
             ),
         ));
     }
-    let morton = total as usize >= morton_min;
     crate::memory::check(
         bvh_bytes(N, total as f64),
         &format!("the BVH of {total} simplices"),
@@ -798,30 +804,64 @@ pub(crate) fn build_using<const N: usize>(
         .filter_map(|(i, (o, _))| orientation_warning(&o.mesh, &format!("objects[{i}]")))
         .collect();
     let shadows = r.shadows && !lights.is_empty();
-    let bvh = if morton {
-        let domain = objects
-            .par_iter()
-            .flat_map(|o| o.mesh.vertices.par_iter())
-            .map(|v| (*v, *v))
-            .reduce(empty_box, merge_boxes);
-        Bvh::build_morton(total as usize, domain, |g| {
-            simplex_at(&objects, &offsets, g)
-        })
-    } else {
-        sah_bvh(&mut objects, &desc.objects, &offsets, shadows)
+    // The trees are built in the objects' own space: the vertices before the transform (the
+    // simplices keep the order the transform gave them), swapped in for the build.
+    let swap_own = |objects: &mut [Object<N>], own: &mut [Option<Vec<Vector<N>>>]| {
+        for (o, v) in objects.iter_mut().zip(own.iter_mut()) {
+            if let Some(v) = v {
+                std::mem::swap(&mut o.mesh.vertices, v);
+            }
+        }
     };
-    let normal_slots = bvh.id_slots(total as usize);
-    let skipped = total as usize - bvh.len();
-    if morton && shadows {
-        certify_from_bvh(&mut objects, &desc.objects, &offsets, &bvh, &normal_slots);
+    swap_own(&mut objects, &mut own);
+    // The untransformed objects in one tree, each transformed object in its own (objects
+    // without simplices, surfaces, in none).
+    let alone = |k: &usize| own[*k].is_some();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let untransformed: Vec<usize> = (0..objects.len()).filter(|k| !alone(k)).collect();
+    if !untransformed.is_empty() {
+        groups.push(untransformed);
     }
-    let extent = extent_of(&objects, &offsets, &normal_slots);
+    groups.extend((0..objects.len()).filter(alone).map(|k| vec![k]));
+    let mut tree_of = vec![0u32; objects.len()];
+    let mut slots = vec![u32::MAX; total as usize];
+    let mut trees = Vec::with_capacity(groups.len());
+    for (t, members) in groups.iter().enumerate() {
+        let tree = group_tree(
+            &mut objects,
+            &desc.objects,
+            (&offsets, &mut slots),
+            members,
+            shadows,
+            morton_min,
+        );
+        members.iter().for_each(|&k| tree_of[k] = t as u32);
+        trees.push(tree);
+    }
+    swap_own(&mut objects, &mut own);
+    drop(own);
+    // A certificate found in object space holds in world space (an affine map keeps a body
+    // convex); the world normals are turned around with the simplices' order (`ToObject`).
+    for (o, m) in objects.iter_mut().zip(&maps) {
+        if m.is_some_and(|m| m.flip) {
+            o.convex = o.convex.map(|side| !side);
+        }
+    }
+    let skipped = total as usize - trees.iter().map(Bvh::len).sum::<usize>();
+    let extent = extent_of(&objects, &offsets, &slots);
     warnings.extend(surface_warnings);
     if skipped > 0 {
         warnings.push(format!(
             "skipped {skipped} degenerate (zero-volume) simplices"
         ));
     }
+    let instances = Instances::new(
+        trees.into_iter().map(Arc::new).collect(),
+        Arc::new(slots),
+        Arc::new(tree_of),
+        Arc::new(offsets.clone()),
+        (maps, &world_boxes(&objects)),
+    );
     Ok(Scene {
         camera,
         objects: Arc::new(objects),
@@ -829,26 +869,87 @@ pub(crate) fn build_using<const N: usize>(
         ambient,
         background,
         render: desc.render.clone(),
-        bvh: Arc::new(bvh),
-        normal_slots: Arc::new(normal_slots),
+        instances,
         offsets,
         skipped_degenerate: skipped,
         extent,
         warnings,
         edge_cache: Arc::default(),
+        instance_min,
     })
 }
 
-/// Convexity certificates from the normals the BVH holds (elevation maps are not certified:
-/// see `sah_bvh`); `slots` as [`Bvh::id_slots`] gives them.
-fn certify_from_bvh<const N: usize>(
+/// The tree of the objects `members` (their meshes in the space the tree is built in), with
+/// their global ids (`offsets`), its slots written into `slots` ([`Bvh::fill_id_slots`]), and
+/// the members' convexity certificates when shadow rays will use them: the SAH build, or the
+/// Morton build from `morton_min` simplices.
+fn group_tree<const N: usize>(
+    objects: &mut [Object<N>],
+    descs: &[ObjectDesc],
+    (offsets, slots): (&[u32], &mut [u32]),
+    members: &[usize],
+    shadows: bool,
+    morton_min: usize,
+) -> Bvh<N> {
+    let count: usize = members
+        .iter()
+        .map(|&k| objects[k].mesh.simplices.len())
+        .sum();
+    if count < morton_min {
+        let tree = sah_bvh(objects, descs, offsets, members, shadows);
+        tree.fill_id_slots(slots);
+        return tree;
+    }
+    // Local index i → (member, simplex): the members' simplices one after the other.
+    let mut starts = Vec::with_capacity(members.len());
+    let mut at = 0;
+    for &k in members {
+        starts.push(at);
+        at += objects[k].mesh.simplices.len();
+    }
+    let split = |i: usize| {
+        let m = starts.partition_point(|&s| s <= i) - 1;
+        (members[m], i - starts[m])
+    };
+    let domain = members
+        .par_iter()
+        .flat_map(|&k| objects[k].mesh.vertices.par_iter())
+        .map(|v| (*v, *v))
+        .reduce(empty_box, merge_boxes);
+    let tree = {
+        let objects = &*objects;
+        Bvh::build_morton_with_ids(
+            count,
+            domain,
+            |i| {
+                let (k, s) = split(i);
+                objects[k].mesh.simplex_points(s)
+            },
+            |i| {
+                let (k, s) = split(i);
+                offsets[k] + s as u32
+            },
+        )
+    };
+    tree.fill_id_slots(slots);
+    if shadows {
+        certify_from_tree(objects, descs, offsets, members, &tree, slots);
+    }
+    tree
+}
+
+/// Convexity certificates of the objects `members` from the normals their tree holds
+/// (elevation maps are not certified: see `sah_bvh`); `slots` as [`Bvh::id_slots`] gives them.
+fn certify_from_tree<const N: usize>(
     objects: &mut [Object<N>],
     descs: &[ObjectDesc],
     offsets: &[u32],
-    bvh: &Bvh<N>,
+    members: &[usize],
+    tree: &Bvh<N>,
     slots: &[u32],
 ) {
-    for (i, (o, d)) in objects.iter_mut().zip(descs).enumerate() {
+    for &i in members {
+        let (o, d) = (&mut objects[i], &descs[i]);
         if d.shape == ShapeKind::Elevation {
             continue;
         }
@@ -857,11 +958,23 @@ fn certify_from_bvh<const N: usize>(
             .into_par_iter()
             .map(|g| match slots[g] {
                 u32::MAX => [0.0; N],
-                slot => bvh.slot_normal(slot),
+                slot => tree.slot_normal(slot),
             })
             .collect();
         o.convex = crate::convex::convex_side(&o.mesh, &normals, known_convex(d.shape));
     }
+}
+
+/// Per object, the box of its world vertices (exact in any order).
+fn world_boxes<const N: usize>(objects: &[Object<N>]) -> Vec<Bounds<N>> {
+    objects
+        .iter()
+        .map(|o| {
+            (o.mesh.vertices.par_iter())
+                .map(|v| (*v, *v))
+                .reduce(empty_box, merge_boxes)
+        })
+        .collect()
 }
 
 /// The diagonal of the box of the simplices the BVH holds (`slots` not `u32::MAX`) and of the
@@ -888,17 +1001,19 @@ fn extent_of<const N: usize>(objects: &[Object<N>], offsets: &[u32], slots: &[u3
 }
 
 impl<const N: usize> Scene<N> {
-    /// The scene `desc` describes, when it differs from the description this scene was built
-    /// from only in its camera, `[composite]` and objects' transforms (a frame of an animation
-    /// that moves objects): its objects are built as a build makes them, and this scene's BVH
-    /// is refitted to them ([`Bvh::refit`]) instead of being built. It traces bit for bit as a
-    /// build of `desc` (every query returns the least (t, id), whatever the tree's shape).
-    /// `None` when the refit is refused (a simplex became degenerate or the reverse, or a
-    /// flat cell no longer passes its checks, or an object is read from a file): build `desc`
-    /// then. Its warnings are this
-    /// scene's (orientation and degeneracy do not change under the transforms a build applies).
+    /// The scene `desc` describes, when `desc` differs from the description this scene was
+    /// built from only in its camera, `[composite]` and objects' transforms (a frame of an
+    /// animation that moves objects; the caller makes sure of that: the objects' meshes must
+    /// be the same): its objects are built as a build makes them, and this scene's trees are
+    /// reached through the new transforms ([`Instances::moved`]) instead of being built: the
+    /// large objects' trees hold them in their own space, so nothing per simplex is done for
+    /// them; the objects traced in world space get a tree built anew when one of them moves.
+    /// It traces bit for bit as a build of `desc`. `None` when an object is read from a file
+    /// (it would be read again), a large object's transform turns handedness around where this
+    /// scene's did not or the reverse (the simplices' order would differ), or a simplex
+    /// traced in world space became degenerate or the reverse: build `desc` then. Its warnings are this
+    /// scene's (orientation and degeneracy do not depend on the transforms).
     pub(crate) fn moved(&self, desc: &SceneDesc) -> Option<R<Scene<N>>> {
-        // Objects read from files (meshes and elevation fields) would be read again: build anew.
         if desc.objects.iter().any(ObjectDesc::reads_file) {
             return None;
         }
@@ -908,8 +1023,9 @@ impl<const N: usize> Scene<N> {
             camera,
             lights,
             mut objects,
-            surface_warnings: _,
-        } = match parts::<N>(desc, None, None) {
+            maps,
+            ..
+        } = match parts::<N>(desc, None, None, (self.instance_min, false)) {
             Ok(p) => p,
             Err(e) => return Some(Err(e)),
         };
@@ -917,27 +1033,55 @@ impl<const N: usize> Scene<N> {
         if offsets != self.offsets || objects.len() != self.objects.len() {
             return None;
         }
-        let bvh = self
-            .bvh
-            .refit(|g| simplex_at(&objects, &offsets, g as usize))?;
-        // The simplices the tree leaves out must still be degenerate.
-        let still = (0..self.normal_slots.len())
-            .into_par_iter()
-            .filter(|&g| self.normal_slots[g] == u32::MAX)
-            .all(|g| PreparedSimplex::new(&simplex_at(&objects, &offsets, g)).is_none());
-        if !still {
+        // Objects of `instance_min` simplices or more are held in their own space, with the
+        // simplices' order of the transform's handedness: it must be the same.
+        let counts: Vec<usize> = objects.iter().map(|o| o.mesh.simplices.len()).collect();
+        let flip = |m: Option<&ToObject<N>>| m.is_some_and(|m| m.flip);
+        let same_order = (0..maps.len())
+            .filter(|&k| counts[k] >= self.instance_min)
+            .all(|k| flip(maps[k].as_ref()) == flip(self.instances.map(k)));
+        if !same_order {
             return None;
         }
-        if desc.render.shadows && !lights.is_empty() {
-            certify_from_bvh(
+        // The certificates were found in the objects' own space, as a build of `desc` finds
+        // them.
+        for (o, base) in objects.iter_mut().zip(self.objects.iter()) {
+            o.convex = base.convex;
+        }
+        // Smaller ones are held in world space: when one moves, they get a tree of their own,
+        // built over the moved vertices as a build of `desc` prepares them (with their
+        // certificates).
+        let small: Vec<usize> = (0..maps.len())
+            .filter(|&k| (1..self.instance_min).contains(&counts[k]))
+            .collect();
+        let boxes = world_boxes(&objects);
+        let instances = if small
+            .iter()
+            .all(|&k| objects[k].mesh == self.objects[k].mesh)
+        {
+            self.instances.moved(maps, &boxes)
+        } else {
+            let mut slots = self.instances.slots().to_vec();
+            for &k in &small {
+                slots[self.ids(k).start as usize..self.ids(k).end as usize].fill(u32::MAX);
+            }
+            let shadows = desc.render.shadows && !lights.is_empty();
+            let tree = group_tree(
                 &mut objects,
                 &desc.objects,
-                &offsets,
-                &bvh,
-                &self.normal_slots,
+                (&offsets, &mut slots),
+                &small,
+                shadows,
+                MORTON_MIN,
             );
-        }
-        let extent = extent_of(&objects, &offsets, &self.normal_slots);
+            // A simplex that became degenerate or the reverse changes the warnings: build.
+            if slots.par_iter().filter(|&&s| s == u32::MAX).count() != self.skipped_degenerate {
+                return None;
+            }
+            self.instances
+                .moved_with((maps, &boxes), tree, &small, slots)
+        };
+        let extent = extent_of(&objects, &offsets, instances.slots());
         let edge_cache = Arc::new(
             self.edge_cache
                 .moved(|o| objects[o].mesh == self.objects[o].mesh),
@@ -949,13 +1093,13 @@ impl<const N: usize> Scene<N> {
             ambient,
             background,
             render: desc.render.clone(),
-            bvh: Arc::new(bvh),
-            normal_slots: Arc::clone(&self.normal_slots),
+            instances,
             offsets,
             skipped_degenerate: self.skipped_degenerate,
             extent,
             warnings: self.warnings.clone(),
             edge_cache,
+            instance_min: self.instance_min,
         }))
     }
 }
@@ -969,13 +1113,20 @@ struct Parts<const N: usize> {
     lights: Vec<Light<N>>,
     objects: Vec<Object<N>>,
     surface_warnings: Vec<String>,
+    /// Per object, the map from world space into its own ([`ToObject::of_transform`]).
+    maps: Vec<Option<ToObject<N>>>,
+    /// Per object with a map, when asked for, its vertices in its own space (before the
+    /// transform).
+    own: Vec<Option<Vec<Vector<N>>>>,
 }
 
-/// Steps 1 and 2 of a build: everything but the BVH.
+/// Steps 1 and 2 of a build: everything but the BVH. Objects of `instance_min` simplices or
+/// more get maps; with `Some(instance_min)` their own vertices are kept too.
 fn parts<const N: usize>(
     desc: &SceneDesc,
     base: Option<&Path>,
     reader: Option<&dyn MeshReader>,
+    (instance_min, keep_own): (usize, bool),
 ) -> R<Parts<N>> {
     // 1. Everything that can be checked cheaply, before any heavy work.
     let background = rgb(&desc.background, "background")?;
@@ -1010,6 +1161,7 @@ fn parts<const N: usize>(
     //    outward normals inward (normals are pseudotensors), so such simplices are reordered to
     //    keep their orientation.
     let mut objects = Vec::with_capacity(desc.objects.len());
+    let (mut maps, mut own) = (Vec::new(), Vec::new());
     let mut surface_warnings = Vec::new();
     for (i, (o, (mat, (a, b)))) in desc.objects.iter().zip(plans).enumerate() {
         let path = format!("objects[{i}]");
@@ -1073,6 +1225,21 @@ fn parts<const N: usize>(
                 ));
             }
         }
+        // An object of INSTANCE_MIN simplices or more is traced in its own space (its tree
+        // holds the vertices before the transform); a transform must be invertible.
+        let map = ToObject::of_transform(&a, &b);
+        if map.is_none() && (a != identity::<N>() || b.iter().any(|&x| x != 0.0)) {
+            return Err(PathError::new(
+                format!("objects[{i}].transform"),
+                format!(
+                    "is singular (determinant {}): it would flatten the object to nothing",
+                    det(&a)
+                ),
+            ));
+        }
+        let map = map.filter(|_| mesh.simplices.len() >= instance_min);
+        maps.push(map);
+        own.push((keep_own && map.is_some()).then(|| mesh.vertices.clone()));
         mesh.vertices
             .par_iter_mut()
             .for_each(|v| *v = add(&mat_vec(&a, v), &b));
@@ -1166,6 +1333,8 @@ fn parts<const N: usize>(
         lights,
         objects,
         surface_warnings,
+        maps,
+        own,
     })
 }
 
@@ -1208,12 +1377,13 @@ fn known_convex(shape: ShapeKind) -> bool {
     )
 }
 
-/// The SAH-built BVH over every non-degenerate simplex of the objects (global ids from
-/// `offsets`), and the objects' convexity certificates when shadow rays will use them.
+/// The SAH-built BVH over every non-degenerate simplex of the objects `members` (global ids
+/// from `offsets`), and their convexity certificates when shadow rays will use them.
 fn sah_bvh<const N: usize>(
     objects: &mut [Object<N>],
     descs: &[ObjectDesc],
     offsets: &[u32],
+    members: &[usize],
     shadows: bool,
 ) -> Bvh<N> {
     // Which simplices are not degenerate, with their bounds (and, for the convexity
@@ -1222,7 +1392,8 @@ fn sah_bvh<const N: usize>(
     let mut ids = Vec::new();
     let mut bounds = Vec::new();
     let mut cells = Vec::new();
-    for ((o, &off), d) in objects.iter_mut().zip(offsets).zip(descs) {
+    for &k in members {
+        let (o, off, d) = (&mut objects[k], offsets[k], &descs[k]);
         // Convexity certificates, which only shadow rays use. An elevation map is not
         // certified: it is a graph over a box, an open surface, and the test would cost more
         // than it saves.
@@ -1303,6 +1474,12 @@ fn sah_bvh<const N: usize>(
             .expect("a simplex prepared once prepares again")
     })
 }
+
+/// Fewest simplices an object with a transform needs to be traced in its own space, in a tree
+/// of its own that frames moving it share ([`Instances`]); smaller ones are traced in world
+/// space, in the tree of the untransformed objects (each instance costs a ray a box test, and
+/// a rebuild of a few thousand simplices costs little).
+pub const INSTANCE_MIN: usize = 4096;
 
 /// Fewest simplices a flat piece needs to be held as a flat cell: below this, testing its
 /// blocks costs less than a walk (an N-cube's facet has (N−1)! simplices: N ≥ 5).

@@ -191,7 +191,10 @@ pub(super) fn surface_color<const N: usize>(
                         origin: crate::linalg::add_scaled(&pt.x, eps, &l),
                         dir: l,
                     };
-                    if scene.bvh.any_hit(&ray, 0.0, to.dist - eps, |_| true, 0..0) {
+                    if scene
+                        .instances
+                        .any_hit(&ray, 0.0, to.dist - eps, |_| true, 0..0)
+                    {
                         continue;
                     }
                 }

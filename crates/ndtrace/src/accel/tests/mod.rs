@@ -5,9 +5,9 @@
 mod build;
 mod cell;
 mod collapse;
+mod instance;
 mod kernels;
 mod morton;
-mod refit;
 mod simplex;
 mod traverse;
 mod tree;
