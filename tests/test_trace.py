@@ -1148,15 +1148,17 @@ def test_mesh_index_errors():
 
 
 def test_singular_transforms_are_errors_naming_the_transform():
-    # Objects are traced in their own space (the ray mapped by the inverse transform), so a
-    # transform must be invertible; a singular one used to flatten the object to nothing.
+    # Large transformed objects are traced in their own space (the ray mapped by the inverse
+    # transform), so the transform of an object with simplices must be invertible; a singular
+    # one used to flatten the object to nothing. A surface may still be flattened.
     flat = [[1, 0, 0], [0, 1, 0], [0, 0, 0]]
     objects = [{"shape": "sphere"}, {"shape": "hypercube", "transform": [{"scale": 0.5}, {"matrix": flat}]}]
     assert dict_error(base_dict(objects=objects)) == (
-        "<dict>: objects[1].transform: is singular (determinant 0): it would flatten the object to nothing")
+        "<dict>: objects[1].transform: is singular or cannot be inverted in floating point (determinant 0): "
+        "an object with simplices needs an invertible transform")
     text = GOOD_TOML + '\n[[objects]]\nshape = "hypercube"\ntransform = [{ matrix = [[1, 2, 0], [2, 4, 0], [0, 0, 1]] }]\n'
     line, col = located(text, "[{ matrix")
-    assert toml_error(text).startswith(f"scene.toml:{line}:{col}: objects[2].transform: is singular (determinant 0)")
+    assert toml_error(text).startswith(f"scene.toml:{line}:{col}: objects[2].transform: is singular or cannot")
     # A mirror is invertible: the object is drawn, as its mirrored mesh.
     mirror = base_dict(objects=[{"shape": "hypercube", "transform": [{"scale": [-0.5, 0.5, 0.5]}]}])
     world = base_dict(objects=[{"shape": "hypercube", "transform": [{"scale": 0.5}]}])

@@ -33,28 +33,34 @@ pub struct ToObject<const N: usize> {
     /// Whether A reverses handedness (det A < 0). The scene then swaps the first two vertices
     /// of each simplex to keep its normal pointing the same way (see [`ToObject::normal`]).
     pub flip: bool,
+    /// The condition number `‖A‖·‖A⁻¹‖` (Frobenius norms): how much the rounding of a mapped
+    /// ray may grow.
+    pub cond: f64,
 }
 
 impl<const N: usize> ToObject<N> {
     /// The inverse of the affine map `x ↦ a·x + b`, with `A⁻ᵀ = cofactor(A)/det A`; `None`
-    /// when `a` is singular or its inverse is not finite.
+    /// when `a` is singular, or its determinant or inverse is not finite (a map too badly
+    /// scaled to invert this way).
     pub fn inverse_of(a: &Matrix<N>, b: &Vector<N>) -> Option<Self> {
         let d = det(a);
         let mt = cofactor_matrix(a).map(|row| scale(&row, 1.0 / d));
         let m = transpose(&mt);
         let c = scale(&mat_vec(&m, b), -1.0);
         let finite = m.iter().flatten().chain(&c).all(|x| x.is_finite());
-        (d != 0.0 && finite).then_some(ToObject {
+        let frobenius = |m: &Matrix<N>| m.iter().flatten().map(|x| x * x).sum::<f64>().sqrt();
+        (d != 0.0 && d.is_finite() && finite).then_some(ToObject {
             m,
             c,
             mt,
             flip: d < 0.0,
+            cond: frobenius(a) * frobenius(&m),
         })
     }
 
     /// The map of an object traced in its own space: [`ToObject::inverse_of`] the transform,
-    /// `None` (traced in world space) for the identity, exactly, and for a singular transform,
-    /// whose world simplices are all degenerate anyway.
+    /// `None` for the identity, exactly (world space is its own space), and when there is no
+    /// inverse (a scene refuses such a transform for an object with simplices).
     pub fn of_transform(a: &Matrix<N>, b: &Vector<N>) -> Option<Self> {
         let identity = *a == identity::<N>() && b.iter().all(|&x| x == 0.0);
         if identity {
@@ -114,8 +120,9 @@ impl<const N: usize> Instance<N> {
     /// Whether the world ray can meet this instance's objects with t in [tmin, tmax]: the
     /// slab test of its padded world box, which costs less than mapping the ray and entering
     /// the tree. The box is padded by [`BOUNDS_PAD`] of its diagonal and its farthest
-    /// coordinate, far beyond the rounding of the world vertices and of the inverse map, so a
-    /// hit the tree would give is never culled.
+    /// coordinate, far beyond the rounding of the world vertices and of the inverse map of a
+    /// well-conditioned transform (a map whose condition number exceeds [`MAX_CULL_COND`] is
+    /// not culled), so a hit the tree would give is not culled.
     #[inline]
     fn reaches(&self, r: &Ray<N>, tmin: f64, tmax: f64) -> bool {
         let (lo, hi) = &self.bounds;
@@ -161,6 +168,9 @@ impl<const N: usize> Instance<N> {
 
 /// Relative padding of an instance's world box (see [`Instance::reaches`]).
 const BOUNDS_PAD: f64 = 1e-6;
+/// Largest condition number of a map whose instance is culled by its box: a mapped ray's
+/// rounding, ~ε·cond·|C|, stays far below the pad unless the eye is ~10⁵ boxes away.
+const MAX_CULL_COND: f64 = 1e4;
 
 /// `a` is a better hit than `b`: the least (t, id) wins.
 #[inline]
@@ -207,8 +217,11 @@ impl<const N: usize> Instances<N> {
         assert_eq!(boxes.len(), offsets.len());
         assert!(tree_of.iter().all(|&t| (t as usize) < trees.len()));
         let mut list: Vec<Instance<N>> = Vec::new();
-        // Per instance, how many objects it answers for; per tree, how many it holds.
+        // Per instance, how many objects it answers for; per tree, how many objects it is
+        // the tree of, and how many of its simplices they own (a tree may also hold stale
+        // copies of objects that moved to another tree: see `moved_with`).
         let (mut members, mut held) = (Vec::new(), vec![0usize; trees.len()]);
+        let mut owned = vec![0usize; trees.len()];
         for (k, (&t, map)) in tree_of.iter().zip(&maps).enumerate() {
             let ids = offsets[k]..offsets.get(k + 1).copied().unwrap_or(slots.len() as u32);
             if ids.is_empty() {
@@ -216,6 +229,10 @@ impl<const N: usize> Instances<N> {
             }
             let tree = t as usize;
             held[tree] += 1;
+            owned[tree] += slots[ids.start as usize..ids.end as usize]
+                .iter()
+                .filter(|&&s| s != u32::MAX)
+                .count();
             let merge = |(a, b): &Bounds<N>, (c, d): &Bounds<N>| -> Bounds<N> {
                 (
                     std::array::from_fn(|i| a[i].min(c[i])),
@@ -243,10 +260,10 @@ impl<const N: usize> Instances<N> {
                 }
             }
         }
-        // An instance that answers for every object of its tree needs no filter; boxes are
-        // padded.
+        // An instance that answers for every simplex its tree holds needs no filter; boxes
+        // are padded.
         for (i, m) in list.iter_mut().zip(members) {
-            if m == held[i.tree] {
+            if m == held[i.tree] && owned[i.tree] == trees[i.tree].len() {
                 i.only = None;
             }
             let (lo, hi) = &mut i.bounds;
@@ -256,6 +273,10 @@ impl<const N: usize> Instances<N> {
             for k in 0..N {
                 lo[k] -= BOUNDS_PAD * reach;
                 hi[k] += BOUNDS_PAD * reach;
+            }
+            // A badly conditioned map may move a mapped ray by more than the pad: no culling.
+            if i.map.is_some_and(|m| !(m.cond <= MAX_CULL_COND)) {
+                i.bounds = ([f64::NEG_INFINITY; N], [f64::INFINITY; N]);
             }
         }
         Instances {
@@ -473,7 +494,10 @@ impl<const N: usize> Instances<N> {
         skip: Range<u32>,
         out: &mut [bool],
     ) {
-        assert!(rays.len() == out.len(), "any_hits: rays and out differ");
+        assert!(
+            rays.len() == out.len() && rays.len() == tmax.len(),
+            "any_hits: rays, tmax and out differ in length"
+        );
         if let [i] = &self.list[..] {
             let accept = |id| i.owns(id) && accept(id);
             return self.trees[i.tree].any_hits(&i.rays(rays), tmin, tmax, accept, skip, out);

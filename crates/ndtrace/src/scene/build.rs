@@ -111,7 +111,8 @@ pub struct Scene<const N: usize> {
     pub render: RenderDesc,
     /// The BVHs over every non-degenerate simplex and the maps taking rays to them: a
     /// transformed object of [`INSTANCE_MIN`] simplices or more is prepared in its own space
-    /// (before its transform), in a tree of its own; the others share one tree in world space; hit ids are global ids (see
+    /// (before its transform), in a tree of its own; the others share one tree in world space
+    /// (a frame that moves some of them gives those a tree built anew); hit ids are global ids (see
     /// [`Scene::locate`]), hit normals world normals. The trees are shared by the scenes
     /// [`Scene::with_camera`] and the frames that move objects make.
     pub instances: Instances<N>,
@@ -1010,8 +1011,8 @@ impl<const N: usize> Scene<N> {
     /// them; the objects traced in world space get a tree built anew when one of them moves.
     /// It traces bit for bit as a build of `desc`. `None` when an object is read from a file
     /// (it would be read again), a large object's transform turns handedness around where this
-    /// scene's did not or the reverse (the simplices' order would differ), or a simplex
-    /// traced in world space became degenerate or the reverse: build `desc` then. Its warnings are this
+    /// scene's did not or the reverse (the simplices' order would differ), or the number of
+    /// degenerate simplices changed (the warnings would): build `desc` then. Its warnings are this
     /// scene's (orientation and degeneracy do not depend on the transforms).
     pub(crate) fn moved(&self, desc: &SceneDesc) -> Option<R<Scene<N>>> {
         if desc.objects.iter().any(ObjectDesc::reads_file) {
@@ -1120,8 +1121,8 @@ struct Parts<const N: usize> {
     own: Vec<Option<Vec<Vector<N>>>>,
 }
 
-/// Steps 1 and 2 of a build: everything but the BVH. Objects of `instance_min` simplices or
-/// more get maps; with `Some(instance_min)` their own vertices are kept too.
+/// Steps 1 and 2 of a build: everything but the BVH. Transformed objects of `instance_min`
+/// simplices or more get maps, and with `keep_own` their own vertices too.
 fn parts<const N: usize>(
     desc: &SceneDesc,
     base: Option<&Path>,
@@ -1226,13 +1227,16 @@ fn parts<const N: usize>(
             }
         }
         // An object of INSTANCE_MIN simplices or more is traced in its own space (its tree
-        // holds the vertices before the transform); a transform must be invertible.
+        // holds the vertices before the transform): the transform of an object with
+        // simplices must be invertible (a singular one would flatten them all to nothing; a
+        // surface's triangles may be flattened).
         let map = ToObject::of_transform(&a, &b);
-        if map.is_none() && (a != identity::<N>() || b.iter().any(|&x| x != 0.0)) {
+        let moves = a != identity::<N>() || b.iter().any(|&x| x != 0.0);
+        if map.is_none() && moves && !mesh.simplices.is_empty() {
             return Err(PathError::new(
                 format!("objects[{i}].transform"),
                 format!(
-                    "is singular (determinant {}): it would flatten the object to nothing",
+                    "is singular or cannot be inverted in floating point (determinant {}): an object with simplices needs an invertible transform",
                     det(&a)
                 ),
             ));

@@ -902,6 +902,41 @@ transform = [{ scale = 0.5 }, { rotate = { quaternions = [[0.6, 0, 0.8, 0], [0.5
     }
 
     #[test]
+    fn frames_moving_small_objects_beside_a_large_one_trace_as_built_anew() {
+        // A large untransformed sphere (24,576 tetrahedra) and a small hypercube share the
+        // world-space tree; frames that move the hypercube give it a tree built anew, and the
+        // shared tree's stale copy of it must not be seen; with "objects" the sphere is
+        // traced through its map in the same tree.
+        for target in ["[1]", "\"objects\""] {
+            let text = format!(
+                "dim = 4\n[camera]\nposition = [0.6, 0.9, 1.3, 3.5]\nlook_at = [0, 0, 0, 0]\n\
+                 up = [[0, 1, 0, 0], [0, 0, 1, 0]]\nfov = 50\nresolution = 14\n\
+                 [[lights]]\ntype = \"point\"\nposition = [2, 2, 1, 2]\n\
+                 [[objects]]\nshape = \"sphere\"\nsubdivisions = 3\n\
+                 [[objects]]\nshape = \"hypercube\"\n\
+                 transform = [{{ scale = 0.3 }}, {{ translate = [0.9, 0.2, 0.3, 0.5] }}]\n\
+                 [render]\nshadows = true\n\
+                 [animation]\nframes = 3\ntarget = {target}\n\
+                 sweep = {{ plane = [0, 3], degrees = [0, 90] }}\n"
+            );
+            let (desc, scene) = load_toml_str(&text, "mix.toml", None).unwrap();
+            for k in 0..3 {
+                let (frame, reused) = reused_frame(&desc, &scene, k, "mix.toml").unwrap().unwrap();
+                let built = build_any(&frame, None, None).unwrap();
+                assert_eq!(
+                    retina_bits(&reused),
+                    retina_bits(&built),
+                    "{target} frame {k}"
+                );
+                if let (AnyScene::D4(a), AnyScene::D4(b)) = (&reused, &built) {
+                    assert_eq!(a.instances.len(), b.instances.len());
+                    assert_eq!(a.skipped_degenerate, b.skipped_degenerate);
+                }
+            }
+        }
+    }
+
+    #[test]
     fn objects_in_their_own_space_trace_as_their_meshes_moved_into_world_space() {
         // Independent reference: each transformed object given instead as a mesh of its
         // world-space vertices (no transform: traced as before instancing, in world space).
