@@ -122,6 +122,16 @@ impl<const N: usize> SahBin<N> {
 
 type SahBins<const N: usize> = [[SahBin<N>; BINS]; N];
 
+/// The bins of two sets of simplices together (exact: counts, min and max).
+fn merge_bins<const N: usize>(mut a: SahBins<N>, b: &SahBins<N>) -> SahBins<N> {
+    for ax in 0..N {
+        for k in 0..BINS {
+            a[ax][k].grow(&b[ax][k].min, &b[ax][k].max, b[ax][k].count);
+        }
+    }
+    a
+}
+
 /// SAH cost weight of n simplices: the number of blocks they fill, since a block tests up to
 /// 4 simplices at the price of one.
 #[inline]
@@ -184,15 +194,28 @@ impl Builder {
     }
 
     fn bin_seq<const N: usize>(refs: &[Ref<N>], cmin: &[f32; N], scale: &[f32; N]) -> SahBins<N> {
-        let mut bins = [[SahBin::EMPTY; BINS]; N];
-        for r in refs {
+        let bin_into = |bins: &mut SahBins<N>, r: &Ref<N>| {
             for a in 0..N {
                 if scale[a] > 0.0 {
                     bins[a][bin_of(r.centre2(a), cmin[a], scale[a])].grow(&r.lo, &r.hi, 1);
                 }
             }
+        };
+        let mut bins = [[SahBin::EMPTY; BINS]; N];
+        if refs.len() < 2 * BINS {
+            refs.iter().for_each(|r| bin_into(&mut bins, r));
+            return bins;
         }
-        bins
+        // Neighbouring records mostly fall into the same bins: two sets of bins, alternating,
+        // halve the chains of updates to one bin (counts and min/max merge exactly).
+        let mut odd = [[SahBin::EMPTY; BINS]; N];
+        for pair in refs.chunks(2) {
+            bin_into(&mut bins, &pair[0]);
+            if let Some(r) = pair.get(1) {
+                bin_into(&mut odd, r);
+            }
+        }
+        merge_bins(bins, &odd)
     }
 
     /// The SAH bins; counts and min/max are exact, so the parallel reduction is deterministic.
@@ -205,17 +228,7 @@ impl Builder {
         if refs.len() >= self.par_min.max(2 * PAR_CHUNK) {
             refs.par_chunks(PAR_CHUNK)
                 .map(|c| Self::bin_seq(c, cmin, scale))
-                .reduce(
-                    || [[SahBin::EMPTY; BINS]; N],
-                    |mut a, b| {
-                        for ax in 0..N {
-                            for k in 0..BINS {
-                                a[ax][k].grow(&b[ax][k].min, &b[ax][k].max, b[ax][k].count);
-                            }
-                        }
-                        a
-                    },
-                )
+                .reduce(|| [[SahBin::EMPTY; BINS]; N], |a, b| merge_bins(a, &b))
         } else {
             Self::bin_seq(refs, cmin, scale)
         }
@@ -251,17 +264,27 @@ impl Builder {
                 if scale[a] == 0.0 {
                     continue;
                 }
-                // Suffix sweep: right_cost[s] = area(bins s..) · blocks(bins s..).
+                // Suffix sweep: right_cost[s] = area(bins s..) · blocks(bins s..). An empty
+                // bin changes neither side, so its cost is its neighbour's: a small node's
+                // sweep only evaluates the bins it fills (the same costs and choice).
                 let mut right_cost = [0.0; BINS];
                 let mut acc = SahBin::EMPTY;
                 for s in (1..BINS).rev() {
                     let b = &bins[a][s];
+                    if b.count == 0 && s + 1 < BINS {
+                        right_cost[s] = right_cost[s + 1];
+                        continue;
+                    }
                     acc.grow(&b.min, &b.max, b.count);
                     right_cost[s] = acc.half_area() * blocks_of(acc.count);
                 }
                 let mut left = SahBin::EMPTY;
                 for s in 1..BINS {
                     let b = &bins[a][s - 1];
+                    // The cost at s equals the cost at s − 1 (taken first on a tie).
+                    if b.count == 0 {
+                        continue;
+                    }
                     left.grow(&b.min, &b.max, b.count);
                     let n_left = left.count as usize;
                     if n_left == 0 || n_left == n {

@@ -99,42 +99,68 @@ impl std::fmt::Display for OrientError {
     }
 }
 
-/// Matches the simplices of `mesh` along their ridges, in time O(S·N²·log S).
+/// Matches the simplices of `mesh` along their ridges, in time O(S·N²) for meshes whose
+/// vertices each lie in a bounded number of simplices.
+///
+/// Each ridge is filed under its smallest vertex index by a counting sort (a stable,
+/// sequential pass: no comparison sort over all S·N ridges); the ridges filed under one vertex
+/// are then matched by their sorted vertices, in parallel over runs of vertices. When a ridge
+/// belongs to more than two simplices, the error names the first such ridge in the order of
+/// the ridges' sorted vertices.
 pub fn ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
     let s = &mesh.simplices;
     let repeated = |idx: &[u32; N]| (1..N).any(|a| idx[..a].contains(&idx[a]));
     let degenerate: Vec<u32> = (0..s.len() as u32)
         .filter(|&i| repeated(&s[i as usize]))
         .collect();
-    // (hash of the ridge, simplex·N + omitted slot), sorted so that a ridge's simplices are
-    // neighbours; a run of equal hashes is then split by the ridges' actual vertices.
-    let mut slots: Vec<(u64, u64)> = (0..s.len() * N)
-        .into_par_iter()
-        .filter(|&r| !repeated(&s[r / N]))
-        .map(|r| (ridge(&s[r / N], r % N).0, r as u64))
-        .collect();
-    slots.par_sort_unstable();
-    // The runs of equal hashes, matched in parallel over pieces cut between runs; the pieces'
-    // results are joined in order (the first non-manifold ridge in hash order is reported).
-    let pieces = rayon::current_num_threads() * 8;
-    let mut cuts = vec![0];
-    for k in 1..pieces {
-        let mut c = (slots.len() * k / pieces).max(*cuts.last().unwrap_or(&0));
-        while c > 0 && c < slots.len() && slots[c].0 == slots[c - 1].0 {
-            c += 1;
+    // The smallest vertex of the ridge opposite slot k.
+    let low = |idx: &[u32; N], k: usize| {
+        (0..N)
+            .filter(|&j| j != k)
+            .map(|j| idx[j])
+            .min()
+            .unwrap_or(0)
+    };
+    let buckets = s.par_iter().flatten().max().map_or(0, |&m| m as usize + 1);
+    // start[v]..start[v + 1]: the ridges filed under vertex v, as simplex·N + omitted slot in
+    // increasing order.
+    let mut start = vec![0usize; buckets + 1];
+    for idx in s.iter().filter(|idx| !repeated(idx)) {
+        for k in 0..N {
+            start[low(idx, k) as usize + 1] += 1;
         }
-        cuts.push(c);
     }
-    cuts.push(slots.len());
+    for v in 0..buckets {
+        start[v + 1] += start[v];
+    }
+    let mut filed = vec![0u64; start[buckets]];
+    let mut fill = start.clone();
+    for (i, idx) in s.iter().enumerate().filter(|(_, idx)| !repeated(idx)) {
+        for k in 0..N {
+            let v = low(idx, k) as usize;
+            filed[fill[v]] = (i * N + k) as u64;
+            fill[v] += 1;
+        }
+    }
+    drop(fill);
+    // Runs of whole buckets of about equal size, matched in parallel and joined in order.
+    let pieces = rayon::current_num_threads() * 8;
+    let mut cuts = vec![0usize];
+    for k in 1..pieces {
+        let want = filed.len() * k / pieces;
+        let v = start.partition_point(|&x| x < want).min(buckets);
+        cuts.push(v.max(*cuts.last().unwrap_or(&0)));
+    }
+    cuts.push(buckets);
     type Matched = (Vec<(u32, u32, bool)>, Vec<u32>);
     let matched: Vec<Result<Matched, OrientError>> = cuts
         .par_windows(2)
         .map(|w| {
             let (mut pairs, mut boundary) = (vec![], vec![]);
             let mut run: Vec<([u32; N], bool, u32)> = vec![];
-            for chunk in slots[w[0]..w[1]].chunk_by(|a, b| a.0 == b.0) {
+            for v in w[0]..w[1] {
                 run.clear();
-                run.extend(chunk.iter().map(|&(_, r)| {
+                run.extend(filed[start[v]..start[v + 1]].iter().map(|&r| {
                     let (simplex, slot) = ((r / N as u64) as usize, (r % N as u64) as usize);
                     let (_, key, odd) = ridge(&s[simplex], slot);
                     (key, odd, simplex as u32)
@@ -158,6 +184,7 @@ pub fn ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
             Ok((pairs, boundary))
         })
         .collect();
+    drop(filed);
     let (mut pairs, mut boundary) = (vec![], vec![]);
     for m in matched {
         let (p, b) = m?;
@@ -219,7 +246,11 @@ impl Repair {
 /// positive) and a piece with a boundary keeps the orientation of the majority of its
 /// simplices. Already consistent, outward pieces are left unchanged.
 pub fn orient<const N: usize>(mesh: &Mesh<N>) -> Result<Repair, OrientError> {
-    let r = ridges(mesh)?;
+    orient_along(mesh, &ridges(mesh)?)
+}
+
+/// [`orient`] with the mesh's ridges `r` already matched.
+fn orient_along<const N: usize>(mesh: &Mesh<N>, r: &Ridges) -> Result<Repair, OrientError> {
     let count = mesh.simplices.len();
     // Neighbour lists (compressed rows), with whether the pair agrees.
     let mut start = vec![0usize; count + 1];
@@ -308,8 +339,9 @@ fn enclosed_volume<const N: usize>(mesh: &Mesh<N>, members: &[usize], flip: &[bo
         }
     }
     let c = scale(&sum, 1.0 / (members.len() * N) as f64);
-    members
-        .iter()
+    // The terms in parallel, summed in order (the same bits for any number of threads).
+    let terms: Vec<f64> = members
+        .par_iter()
         .map(|&m| {
             let p = mesh.simplex_points(m);
             let v = dot(&simplex_normal(&p), &sub(&p[0], &c));
@@ -319,7 +351,8 @@ fn enclosed_volume<const N: usize>(mesh: &Mesh<N>, members: &[usize], flip: &[bo
                 v
             }
         })
-        .sum()
+        .collect();
+    terms.iter().sum()
 }
 
 /// The load-time check of a mesh object: `Some((flipped, simplices))` when the mesh is closed
@@ -332,7 +365,7 @@ pub fn inconsistency<const N: usize>(mesh: &Mesh<N>) -> Option<(usize, usize)> {
         return None;
     }
     let count = mesh.simplices.len();
-    match orient(mesh) {
+    match orient_along(mesh, &r) {
         Ok(repair) => Some((
             repair
                 .pieces
@@ -420,6 +453,117 @@ mod tests {
     #[test]
     fn generated_shapes_need_no_repair() {
         for_each_dim!(generated_shapes_are_closed_consistent_and_outward);
+    }
+
+    /// The ridges by brute force: every ridge's simplices in a map keyed by its sorted
+    /// vertices, the orientation each induces counted as the parity of the permutation that
+    /// sorts `(omitted slot, the other slots)`, by counting swaps of a bubble sort.
+    fn brute_force_ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
+        use std::collections::BTreeMap;
+        let mut by_ridge: BTreeMap<Vec<u32>, Vec<(u32, bool)>> = BTreeMap::new();
+        let mut degenerate = vec![];
+        for (i, idx) in mesh.simplices.iter().enumerate() {
+            let mut distinct = idx.to_vec();
+            distinct.sort();
+            distinct.dedup();
+            if distinct.len() < N {
+                degenerate.push(i as u32);
+                continue;
+            }
+            for k in 0..N {
+                // The simplex's vertices with slot k moved to the front: parity k.
+                let mut seq: Vec<u32> = std::iter::once(idx[k])
+                    .chain((0..N).filter(|&j| j != k).map(|j| idx[j]))
+                    .collect();
+                let mut swaps = k;
+                for end in (2..N).rev() {
+                    for j in 1..end {
+                        if seq[j] > seq[j + 1] {
+                            seq.swap(j, j + 1);
+                            swaps += 1;
+                        }
+                    }
+                }
+                by_ridge
+                    .entry(seq[1..].to_vec())
+                    .or_default()
+                    .push((i as u32, swaps % 2 == 1));
+            }
+        }
+        let (mut pairs, mut boundary) = (vec![], vec![]);
+        for (key, list) in by_ridge {
+            match list[..] {
+                [(a, _)] => boundary.push(a),
+                [(a, x), (b, y)] => pairs.push((a.min(b), a.max(b), x != y)),
+                _ => {
+                    return Err(OrientError::NonManifold {
+                        ridge: key,
+                        simplices: list.len(),
+                    })
+                }
+            }
+        }
+        pairs.sort();
+        boundary.sort();
+        Ok(Ridges {
+            pairs,
+            boundary,
+            degenerate,
+        })
+    }
+
+    /// `ridges` agrees with the brute force on closed shapes, on shapes with simplices removed,
+    /// flipped and shuffled, and on random soups over few vertices (non-manifold ridges,
+    /// repeated indices, vertices in no simplex), in every dimension.
+    #[test]
+    fn ridges_agree_with_a_brute_force() {
+        fn check<const N: usize>() {
+            let mut r = rng(70 + N as u64);
+            let mut meshes = shapes::<N>();
+            for base in shapes::<N>() {
+                let mut m = base.clone();
+                m.simplices.retain(|_| r.random_bool(0.8));
+                for idx in &mut m.simplices {
+                    if r.random_bool(0.3) {
+                        idx.swap(0, N - 1);
+                    }
+                }
+                for i in (1..m.simplices.len()).rev() {
+                    m.simplices.swap(i, r.random_range(0..=i));
+                }
+                meshes.push(m);
+            }
+            for soup in 0..40 {
+                // N distinct vertices of few, in random order, one in ten with a repeat.
+                let verts = N + 1 + soup % 3;
+                let simplices = (0..r.random_range(1..3 * verts))
+                    .map(|_| {
+                        let mut pool: Vec<u32> = (0..verts as u32).collect();
+                        let mut idx = [0u32; N];
+                        for slot in &mut idx {
+                            *slot = pool.swap_remove(r.random_range(0..pool.len()));
+                        }
+                        if r.random_bool(0.1) {
+                            idx[N - 1] = idx[0];
+                        }
+                        idx
+                    })
+                    .collect();
+                meshes.push(Mesh {
+                    vertices: vec![[0.0; N]; verts + 2],
+                    simplices,
+                });
+            }
+            let mut errors = 0;
+            for (k, m) in meshes.iter().enumerate() {
+                let want = brute_force_ridges(m);
+                errors += usize::from(want.is_err());
+                assert_eq!(ridges(m), want, "N = {N}, mesh {k}");
+            }
+            // The soups do meet non-manifold ridges, and the others do not.
+            assert!(errors > 0 && errors < meshes.len(), "N = {N}: {errors}");
+        }
+        for_each_dim!(check);
     }
 
     /// The hypercube's enclosed volume is 2^N: V = Σ N·(x_0 − c)/N! is the divergence theorem.
