@@ -210,3 +210,62 @@ def test_the_bindings_read_any_layout_in_index_order():
     for vv, ss in ((np.asfortranarray(v), np.asfortranarray(s)), (wide_v[:, ::2], wide_s[::2])):
         assert not (vv.flags.c_contiguous or ss.flags.c_contiguous)
         assert np.array_equal(depth(vv, ss), want, equal_nan=True)
+
+
+def test_lendable_is_read_only_down_to_an_owner_that_cannot_change():
+    a = np.arange(12.0).reshape(4, 3)
+    assert not _ndtrace.lendable(a)  # writeable
+    owned = a.copy()
+    owned.setflags(write=False)
+    assert _ndtrace.lendable(owned)
+    view = a.view()
+    view.setflags(write=False)
+    assert not _ndtrace.lendable(view)  # its owner is writeable
+    ro_view = owned[1:]
+    assert _ndtrace.lendable(ro_view)
+    assert _ndtrace.lendable(np.frombuffer(bytes(96)))  # bytes cannot change
+    mutable = np.frombuffer(bytearray(96))
+    mutable.setflags(write=False)
+    assert not _ndtrace.lendable(mutable)  # the bytearray can
+    assert not _ndtrace.lendable([1.0, 2.0])
+
+
+def test_a_read_only_array_is_shared_and_read_in_place():
+    v, s, values = _mesh()
+    v, s, values = v.copy(), s.astype(np.int64), values.copy()  # each owns its memory
+    for a in (v, s, values):
+        a.setflags(write=False)
+    scene = _scene(v, s, values)
+    obj = scene._data["objects"][0]
+    # No snapshot: the caller's read-only arrays are the scene's.
+    assert obj["vertices"] is v and obj["simplices"] is s and obj["values"] is values
+    _same_trace(scene, _scene(v.tolist(), s.tolist(), values.tolist()))
+    compiled = scene.compiled()
+    # The core reads the array's memory, not a copy of it: a caller who breaks the promise
+    # and writes to it shows that (the description reads the new number).
+    v.setflags(write=True)
+    v[0, 0] += 1.0
+    assert compiled.to_dict()["objects"][0]["vertices"][0, 0] == v[0, 0]
+    # A writeable array is copied: the description keeps the old number.
+    w = v.copy()
+    copied = _scene(w, s, values).compiled()
+    w[0, 0] += 1.0
+    assert copied.to_dict()["objects"][0]["vertices"][0, 0] == v[0, 0]
+
+
+def test_the_core_keeps_a_lent_array_alive():
+    import gc
+
+    def compiled():
+        v, s, values = _mesh()
+        v, s = v.copy(), s.astype(np.int64)
+        v.setflags(write=False)
+        s.setflags(write=False)
+        return _scene(v, s, values).compiled(), v.copy(), s.copy()
+
+    c, v, s = compiled()  # the scene and its arrays are gone but for the core's references
+    gc.collect()
+    junk = [np.full(v.shape, 7.0) for _ in range(50)]  # memory freed would be reused
+    obj = c.to_dict()["objects"][0]
+    assert np.array_equal(obj["vertices"], v) and np.array_equal(obj["simplices"], s)
+    del junk

@@ -117,6 +117,9 @@ def load_dict(
     reader: _MeshReader | None = None,
     like: CompiledScene | None = None,
 ) -> CompiledScene: ...
+def lendable(value: object) -> bool:
+    """Whether a numpy array's memory can be lent to a scene without a copy: read-only and
+    aligned, as is every array it views, down to one that owns its memory or views ``bytes``."""
 
 # -- meshes ---------------------------------------------------------------------------
 

@@ -45,8 +45,10 @@ def _snapshot(path: str, key: str, value: np.ndarray) -> np.ndarray | None:
     """The array at an object's ``key`` as the one C-ordered array the loader takes (a
     read-only snapshot: the scene must not change when the caller's array does, and copies of
     the scene can then share it), or None when it is not one (lists then, and the loader says
-    what is wrong, as for the equal lists). Masked entries of a float array are NaN (refused,
-    located, by the loader); masked indices and rows of no numbers go as lists."""
+    what is wrong, as for the equal lists). An array that is read-only down to its owner
+    (:func:`_ndtrace.lendable`) is its own snapshot: no copy is made, and the loader reads its
+    memory in place. Masked entries of a float array are NaN (refused, located, by the
+    loader); masked indices and rows of no numbers go as lists."""
     ndim, dtype = _ARRAY_KEYS[key]
     if key == "field":
         a = _field(path, value)
@@ -63,6 +65,10 @@ def _snapshot(path: str, key: str, value: np.ndarray) -> np.ndarray | None:
             a = np.ascontiguousarray(value.astype(np.float64).filled(np.nan))
         else:
             a = np.ascontiguousarray(value, dtype=dtype)
+    if a is value and _ndtrace.lendable(a):
+        # Read-only down to its owner (a snapshot already, or the caller's read-only array):
+        # shared as it is, and lent to the loader without a copy.
+        return a
     if np.may_share_memory(a, value):
         a = a.copy()
     a.setflags(write=False)
@@ -76,8 +82,8 @@ MAX_DEPTH = 32
 def _plain(value: Any, path: str = "", depth: int = 0) -> Any:
     """Nested numpy arrays and scalars → lists and Python numbers (for the Rust loader), except
     the mesh and field arrays of objects (:data:`_ARRAY_KEYS`), which stay one C-ordered array
-    each (the loader copies its buffer; a million numbers as lists would cost about 100 bytes
-    each). A container nested deeper than :data:`MAX_DEPTH` (one that contains itself, say) is
+    each (the loader reads a read-only one in place; a million numbers as lists would cost
+    about 100 bytes each). A container nested deeper than :data:`MAX_DEPTH` (one that contains itself, say) is
     a ValueError naming where."""
     if depth > MAX_DEPTH:
         raise ValueError(f"{path or 'the scene'}: nested more than {MAX_DEPTH} levels deep "

@@ -5,7 +5,8 @@
 //! The keys of an object that may hold an array, and its form, are [`KEYS`]: an elevation
 //! map's `field`, a mesh's or surface's `vertices`, `simplices`, `triangles` and `values`.
 
-use ndtrace::scene::desc::{Column, FieldDesc, Grid, ObjectDesc, Rows, Table};
+use ndtrace::scene::desc::{Column, FieldDesc, Grid, ObjectDesc, Rows, Shared, Table};
+use ndtrace::scene::table::Number;
 use ndtrace::scene::SceneDesc;
 use ndtrace::NdError;
 use numpy::ndarray::ArrayViewD;
@@ -13,8 +14,7 @@ use numpy::{
     Element, PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
-use std::sync::Arc;
+use pyo3::types::{PyBytes, PyDict, PyList};
 
 /// An object key that may hold a numpy array: its dimensions and element type.
 struct Key {
@@ -59,13 +59,13 @@ static KEYS: [Key; 5] = [
     },
 ];
 
-/// An array's numbers, copied once into the description, by key.
+/// An array's numbers, lent to the description or copied once into it, by key.
 enum Payload {
     Field(Grid),
     Vertices(Table<f64>),
     Simplices(Table<i64>),
     Triangles(Table<i64>),
-    Values(Arc<[f64]>),
+    Values(Shared<f64>),
 }
 
 /// An array taken out of `objects[index]`.
@@ -175,27 +175,80 @@ fn payload(value: &Bound<'_, PyAny>, key: &Key) -> Result<Payload, String> {
     }
 }
 
-fn table<T: ndtrace::scene::table::Number>(
-    width: usize,
-    values: Arc<[T]>,
-) -> Result<Table<T>, String> {
+fn table<T: Number>(width: usize, values: Shared<T>) -> Result<Table<T>, String> {
     let rows = values.len().checked_div(width).unwrap_or(0);
     Table::new(width, values)
         .ok_or_else(|| format!("an array of {rows} rows of {width} with a wrong number of values"))
 }
 
-/// An array of `T` copied once into a shared buffer, C order; `None` for another dtype.
-fn flat<T: Element + Copy>(value: &Bound<'_, PyAny>) -> Option<Arc<[T]>> {
+/// The numbers of an array of `T` in C order, lent without a copy when the array is
+/// [`lendable`], else copied once into a buffer of the description's own; `None` for another
+/// dtype.
+fn flat<T: Element + Number>(value: &Bound<'_, PyAny>) -> Option<Shared<T>> {
     let a = value.extract::<PyReadonlyArrayDyn<'_, T>>().ok()?;
     // `as_slice` also takes Fortran-ordered memory as it lies: only a C-ordered array's is
     // its C order.
     Some(match a.as_slice() {
-        Ok(s) if a.is_c_contiguous() => s.into(),
+        Ok(s) if !s.is_empty() && a.is_c_contiguous() && lendable(value) => Shared::lent(Lent {
+            _array: value.clone().unbind(),
+            ptr: s.as_ptr(),
+            len: s.len(),
+        }),
+        Ok(s) if a.is_c_contiguous() => s.to_vec().into(),
         _ => {
             let view: ArrayViewD<'_, T> = a.as_array();
-            view.iter().copied().collect()
+            view.iter().copied().collect::<Vec<T>>().into()
         }
     })
+}
+
+/// A read-only numpy array's numbers, lent to the description: holding the array keeps its
+/// memory alive, and nothing writes to it ([`lendable`]).
+struct Lent<T> {
+    _array: Py<PyAny>,
+    ptr: *const T,
+    len: usize,
+}
+
+// SAFETY: the numbers are never written while the array is held (`lendable`), so they may be
+// read from any thread; the array object is only dropped, which pyo3 defers to a thread that
+// holds the GIL.
+unsafe impl<T: Sync> Send for Lent<T> {}
+unsafe impl<T: Sync> Sync for Lent<T> {}
+
+impl<T> AsRef<[T]> for Lent<T> {
+    fn as_ref(&self) -> &[T] {
+        // SAFETY: `ptr` and `len` are the slice of the held array's memory (see `flat`).
+        unsafe { std::slice::from_raw_parts(self.ptr, self.len) }
+    }
+}
+
+/// Whether the memory of `value`, a numpy array, can be lent to a description without a copy:
+/// it is read-only and aligned, and so is every array it is a view of, down to one that owns
+/// its memory or views a `bytes` object (immutable). Such an array stays unchanged unless its
+/// owner is made writeable again (`setflags(write=True)`), which the Python API documents
+/// against. The Python `Scene` asks this before it snapshots an array (`_snapshot`).
+#[pyfunction]
+pub(crate) fn lendable(value: &Bound<'_, PyAny>) -> bool {
+    let flag = |a: &Bound<'_, PyAny>, name: &str| -> Option<bool> {
+        a.getattr("flags").ok()?.getattr(name).ok()?.extract().ok()
+    };
+    let mut a = value.clone();
+    loop {
+        if a.cast::<PyUntypedArray>().is_err()
+            || flag(&a, "writeable") != Some(false)
+            || flag(&a, "aligned") != Some(true)
+        {
+            return false;
+        }
+        let Ok(base) = a.getattr("base") else {
+            return false;
+        };
+        if base.is_none() || base.is_exact_instance_of::<PyBytes>() {
+            return true;
+        }
+        a = base;
+    }
 }
 
 /// Puts the arrays taken by [`take_arrays`] into the deserialized description.

@@ -591,12 +591,12 @@ impl<const N: usize> Bvh<N> {
                 .collect();
             (bin, order)
         };
-        let tree = wide_tree(&bin, &order, |i| prepare(i, ids[i]), &ids, &cells);
-        drop(ids);
         let root = &bin[0];
         let reach = (0..N)
             .map(|i| f64::from(root.min[i].abs()).max(f64::from(root.max[i].abs())))
             .fold(0.0, f64::max);
+        let tree = wide_tree(bin, &order, |i| prepare(i, ids[i]), &ids, &cells);
+        drop((ids, order));
         // Non-finite bounds only widen the slab test (and the shift saturates to infinity).
         let reach = if reach.is_finite() {
             reach

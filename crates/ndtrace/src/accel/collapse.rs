@@ -10,9 +10,16 @@ use super::tree::{
 
 /// The mark of a flat cell in the leaf order: `CELL_MARK | c` is cell c of the build's list.
 pub(super) const CELL_MARK: u32 = 1 << 31;
-/// The `block_first` of a block already filled (a flat cell's).
-const FILLED: u32 = u32::MAX;
 use rayon::prelude::*;
+
+/// A leaf block as the layout places it, filled once the layout is done (and the binary tree
+/// is gone): `count` simplices from position `first` of the leaf order, or the `chunk`-th
+/// [`BLOCK_WIDTH`] members of flat cell `cell` of the build's list.
+#[derive(Clone, Copy)]
+enum Pending {
+    Order { first: u32, count: u32 },
+    Cell { cell: u32, chunk: u32 },
+}
 
 /// How each binary subtree is laid out in the wide tree: the optimal collapse of Ylitie,
 /// Karras and Laine ("Efficient incoherent ray traversal on GPUs through compressed wide BVHs",
@@ -110,20 +117,16 @@ impl CollapsePlan {
 struct Collapse<'a, const N: usize> {
     bin: &'a [BinaryNode<N>],
     plan: CollapsePlan,
-    /// The input ids, and the leaf order: `order[j]` is the input index of the j-th simplex in
-    /// leaf order (or `CELL_MARK | c` for cell c).
-    ids: &'a [u32],
+    /// The leaf order: `order[j]` is the input index of the j-th simplex in leaf order (or
+    /// `CELL_MARK | c` for cell c).
     order: &'a [u32],
     /// The flat cells of the build (members, geometry), and those made so far with their links.
     cells_in: &'a [(Vec<u32>, CellGeometry<N>)],
     cells: Vec<Cell>,
     cell_links: Vec<[u32; N]>,
     nodes: Vec<WideNode<N>>,
-    /// The blocks, their simplices' ids set and their prepared simplices filled in afterwards
-    /// (in parallel) from `block_first`, the position of each block's first simplex in `order`
-    /// ([`FILLED`] for the blocks of flat cells, filled when made).
-    blocks: Vec<LeafBlock<N>>,
-    block_first: Vec<u32>,
+    /// The blocks, in order, filled afterwards (in parallel).
+    blocks: Vec<Pending>,
 }
 
 impl<const N: usize> Collapse<'_, N> {
@@ -143,42 +146,31 @@ impl<const N: usize> Collapse<'_, N> {
             debug_assert_eq!(nd.count, 1);
             return self.cell((first & !CELL_MARK) as usize);
         }
-        let mut block = LeafBlock::EMPTY;
-        block.count = nd.count;
-        for l in 0..nd.count as usize {
-            block.ids[l] = self.ids[self.order[nd.first as usize + l] as usize];
-        }
-        self.push_block(block, nd.first)
+        self.push_block(Pending::Order {
+            first: nd.first,
+            count: nd.count,
+        })
     }
 
-    /// Appends a block whose simplices start at position `first` of the leaf order (or that is
-    /// [`FILLED`]); its reference.
-    fn push_block(&mut self, block: LeafBlock<N>, first: u32) -> u32 {
+    /// Appends a block; its reference.
+    fn push_block(&mut self, block: Pending) -> u32 {
         assert!(
             self.blocks.len() < CELL_TAG as usize,
             "Bvh::build: too many blocks"
         );
         self.blocks.push(block);
-        self.block_first.push(first);
         LEAF_TAG | (self.blocks.len() - 1) as u32
     }
 
-    /// The blocks of flat cell c (its members in order, filled now from the prepared simplices
-    /// of its geometry) and its reference.
+    /// The blocks of flat cell c (its members in order) and its reference.
     fn cell(&mut self, c: usize) -> u32 {
         let (members, geometry) = &self.cells_in[c];
         let first_block = self.blocks.len() as u32;
-        for (chunk, prepared) in members
-            .chunks(BLOCK_WIDTH)
-            .zip(geometry.prepared.chunks(BLOCK_WIDTH))
-        {
-            let mut block = LeafBlock::EMPTY;
-            block.count = chunk.len() as u32;
-            for (l, (&i, p)) in chunk.iter().zip(prepared).enumerate() {
-                block.ids[l] = self.ids[i as usize];
-                block.set_lane(l, p);
-            }
-            self.push_block(block, FILLED);
+        for chunk in 0..members.len().div_ceil(BLOCK_WIDTH) as u32 {
+            self.push_block(Pending::Cell {
+                cell: c as u32,
+                chunk,
+            });
         }
         assert!(
             self.cells.len() < (CELL_TAG - 1) as usize,
@@ -273,27 +265,27 @@ pub(super) struct WideTree<const N: usize> {
 
 /// The wide tree over the binary tree `bin` with leaf order `order` (input indices, and
 /// `CELL_MARK | c` for the flat cells `cells`), laid out by the [`CollapsePlan`]; `prepare(i)`
-/// and `ids[i]` are the input simplices. The blocks' simplices are prepared in parallel once
-/// the layout is known, so that no list of prepared simplices is alive beside the blocks.
+/// and `ids[i]` are the input simplices. The binary tree and the plan are dropped once the
+/// layout is known, before the blocks are made; their simplices are then prepared in
+/// parallel, so that neither the binary tree nor a list of prepared simplices is alive beside
+/// the blocks.
 pub(super) fn wide_tree<const N: usize>(
-    bin: &[BinaryNode<N>],
+    bin: Vec<BinaryNode<N>>,
     order: &[u32],
     prepare: impl Fn(usize) -> PreparedSimplex<N> + Sync,
     ids: &[u32],
     cells: &[(Vec<u32>, CellGeometry<N>)],
 ) -> WideTree<N> {
-    let plan = CollapsePlan::new(bin);
+    let plan = CollapsePlan::new(&bin);
     let mut c = Collapse {
-        bin,
+        bin: &bin,
         plan,
-        ids,
         order,
         cells_in: cells,
         cells: Vec::with_capacity(cells.len()),
         cell_links: Vec::new(),
         nodes: Vec::new(),
         blocks: Vec::with_capacity(bin.iter().filter(|b| b.count > 0).count()),
-        block_first: Vec::new(),
     };
     if bin[0].count > 0 {
         // A single leaf: a root node with one child.
@@ -307,21 +299,47 @@ pub(super) fn wide_tree<const N: usize>(
     } else {
         c.node(0);
     }
-    let (mut nodes, mut blocks) = (c.nodes, c.blocks);
-    (blocks.par_iter_mut().zip(c.block_first))
-        .with_min_len(256)
-        .filter(|(_, first)| *first != FILLED)
-        .for_each(|(block, first)| {
-            for l in 0..block.count as usize {
-                block.set_lane(l, &prepare(order[first as usize + l] as usize));
-            }
-        });
+    let Collapse {
+        mut nodes,
+        blocks: pending,
+        cells: made,
+        cell_links,
+        ..
+    } = c;
+    drop(bin);
     nodes.shrink_to_fit();
-    blocks.shrink_to_fit();
+    let blocks = pending
+        .par_iter()
+        .with_min_len(256)
+        .map(|&p| {
+            let mut block = LeafBlock::EMPTY;
+            match p {
+                Pending::Order { first, count } => {
+                    block.count = count;
+                    for l in 0..count as usize {
+                        let i = order[first as usize + l] as usize;
+                        block.ids[l] = ids[i];
+                        block.set_lane(l, &prepare(i));
+                    }
+                }
+                Pending::Cell { cell, chunk } => {
+                    let (members, geometry) = &cells[cell as usize];
+                    let at = chunk as usize * BLOCK_WIDTH..;
+                    let (members, prepared) = (&members[at.clone()], &geometry.prepared[at]);
+                    for (l, (&i, p)) in members.iter().zip(prepared).take(BLOCK_WIDTH).enumerate() {
+                        block.ids[l] = ids[i as usize];
+                        block.set_lane(l, p);
+                        block.count += 1;
+                    }
+                }
+            }
+            block
+        })
+        .collect();
     WideTree {
         nodes,
         blocks,
-        cells: c.cells,
-        cell_links: c.cell_links,
+        cells: made,
+        cell_links,
     }
 }

@@ -27,7 +27,7 @@
 
 use serde::{Deserialize, Serialize};
 
-pub use super::table::{Column, Rows, Table};
+pub use super::table::{Column, Rows, Shared, Table};
 
 /// The camera's projection, a scene key (`camera.projection`) defined beside the camera.
 pub use crate::camera::Projection;
@@ -438,12 +438,12 @@ impl PartialEq for FieldDesc {
 #[derive(Debug, Clone)]
 pub struct Grid {
     shape: [usize; 3],
-    values: std::sync::Arc<[f64]>,
+    values: Shared<f64>,
 }
 
 impl Grid {
     /// A grid of `values` (C order) with `shape`; `None` unless their counts agree.
-    pub fn new(shape: [usize; 3], values: impl Into<std::sync::Arc<[f64]>>) -> Option<Grid> {
+    pub fn new(shape: [usize; 3], values: impl Into<Shared<f64>>) -> Option<Grid> {
         let values = values.into();
         let count = shape.iter().try_fold(1usize, |n, &k| n.checked_mul(k));
         (count == Some(values.len())).then_some(Grid { shape, values })

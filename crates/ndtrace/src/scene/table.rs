@@ -4,6 +4,10 @@
 //!
 //! Both forms read and compare the same: an array equals the inline lists with the same
 //! numbers (what it becomes on a TOML round trip), and is written as those lists.
+//!
+//! A buffer ([`Shared`]) is the description's own, or lent by an owner that keeps it alive and
+//! unchanged: the bindings lend a read-only numpy array's memory, so that a mesh goes from
+//! numpy to the build without a copy.
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::borrow::Cow;
@@ -28,18 +32,62 @@ impl Number for i64 {
     }
 }
 
+/// An immutable buffer of numbers, shared between copies of the description: its own (from a
+/// `Vec` or an `Arc<[T]>`), or lent ([`Shared::lent`]) by an owner that keeps the memory alive
+/// and unchanged for as long as it is held.
+#[derive(Clone)]
+pub struct Shared<T: 'static>(Arc<dyn AsRef<[T]> + Send + Sync>);
+
+impl<T: Number> Shared<T> {
+    /// The numbers of `owner`, which must not change while the buffer or a copy of it is held
+    /// (`as_ref` must give the same numbers every time).
+    pub fn lent(owner: impl AsRef<[T]> + Send + Sync + 'static) -> Self {
+        Shared(Arc::new(owner))
+    }
+
+    /// Whether `a` and `b` are copies of one buffer.
+    pub fn same(a: &Self, b: &Self) -> bool {
+        std::ptr::addr_eq(Arc::as_ptr(&a.0), Arc::as_ptr(&b.0))
+    }
+}
+
+impl<T: 'static> std::ops::Deref for Shared<T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        (*self.0).as_ref()
+    }
+}
+
+impl<T: Number> From<Vec<T>> for Shared<T> {
+    fn from(v: Vec<T>) -> Self {
+        Shared(Arc::new(v))
+    }
+}
+
+impl<T: Number> From<Arc<[T]>> for Shared<T> {
+    fn from(v: Arc<[T]>) -> Self {
+        Shared(Arc::new(v))
+    }
+}
+
+impl<T: std::fmt::Debug + 'static> std::fmt::Debug for Shared<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.iter()).finish()
+    }
+}
+
 /// Rows of `width` numbers in one flat C-ordered buffer, shared between copies of the
 /// description.
 #[derive(Debug, Clone)]
-pub struct Table<T> {
+pub struct Table<T: 'static> {
     width: usize,
-    values: Arc<[T]>,
+    values: Shared<T>,
 }
 
 impl<T: Number> Table<T> {
     /// `values` as rows of `width`; `None` unless `width` divides their count (a table of no
     /// rows may have any width, a table with rows a positive one).
-    pub fn new(width: usize, values: impl Into<Arc<[T]>>) -> Option<Table<T>> {
+    pub fn new(width: usize, values: impl Into<Shared<T>>) -> Option<Table<T>> {
         let values = values.into();
         let fits = if width == 0 {
             values.is_empty()
@@ -67,7 +115,7 @@ impl<T: Number> Table<T> {
 
 /// Rows of numbers: inline lists, or a [`Table`] from the bindings (never read from TOML).
 #[derive(Debug, Clone)]
-pub enum Rows<T> {
+pub enum Rows<T: 'static> {
     /// Nested lists, as read (rows may differ in length until the scene is built).
     Inline(Vec<Vec<T>>),
     /// One flat buffer of equal rows.
@@ -118,7 +166,7 @@ impl<T: Number> PartialEq for Rows<T> {
             a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.bits() == y.bits())
         };
         match (self, other) {
-            (Rows::Array(a), Rows::Array(b)) if Arc::ptr_eq(&a.values, &b.values) => {
+            (Rows::Array(a), Rows::Array(b)) if Shared::same(&a.values, &b.values) => {
                 a.width == b.width
             }
             _ => {
@@ -145,11 +193,11 @@ impl<'de, T: Number + Deserialize<'de>> Deserialize<'de> for Rows<T> {
 
 /// One number per vertex: an inline list, or a shared buffer from the bindings.
 #[derive(Debug, Clone)]
-pub enum Column<T> {
+pub enum Column<T: 'static> {
     /// A list, as read.
     Inline(Vec<T>),
     /// A flat buffer from a 1-D array.
-    Array(Arc<[T]>),
+    Array(Shared<T>),
 }
 
 impl<T: Number> Column<T> {
@@ -216,6 +264,32 @@ mod tests {
         assert_eq!(inline.flat(2), Err((1, 1)));
         assert_eq!(Rows::<f64>::Inline(vec![]).flat(4).unwrap().len(), 0);
         assert_eq!((a.len(), inline.len()), (2, 2));
+    }
+
+    /// A lent buffer reads its owner's numbers in place and compares as an owned one.
+    #[test]
+    fn a_lent_buffer_reads_its_owner_in_place() {
+        struct Owner(Box<[f64]>);
+        impl AsRef<[f64]> for Owner {
+            fn as_ref(&self) -> &[f64] {
+                &self.0
+            }
+        }
+        let owner = Owner(vec![1.0, 2.0, 3.0, 4.0].into_boxed_slice());
+        let at = owner.0.as_ptr();
+        let lent = Shared::lent(owner);
+        assert_eq!(lent.as_ptr(), at);
+        let copy = lent.clone();
+        assert!(Shared::same(&lent, &copy) && copy.as_ptr() == at);
+        let owned = Shared::from(vec![1.0, 2.0, 3.0, 4.0]);
+        assert!(!Shared::same(&lent, &owned));
+        let rows = |v: &Shared<f64>| Rows::Array(Table::new(2, v.clone()).unwrap());
+        assert_eq!(rows(&lent), rows(&owned));
+        assert_ne!(rows(&lent), array(2, &[1.0, 2.0, 3.0, 5.0]));
+        assert_eq!(
+            Column::Array(lent),
+            Column::Inline(vec![1.0, 2.0, 3.0, 4.0])
+        );
     }
 
     #[test]
