@@ -9,7 +9,9 @@ For each mesh, in a fresh subprocess so that its peak memory is its own, prints
   triangles in the same process (``EmbreeScene`` + ``TriangleMesh``, committed by its first
   ray query), median of as many runs; and the ratio of the two;
 * ``peak B/simplex``: the growth of the process's peak resident memory over what it held with
-  the mesh arrays loaded (the cost of the load itself), per simplex;
+  the mesh arrays loaded (the cost of the load itself), per simplex; after one build of a tiny
+  mesh of the same dimension, so that what any first build costs once (the thread pool, the
+  extension's code paged in: about 10 MB) is not counted per simplex;
 * ``BVH B/simplex``: the built BVH's own memory (``bvh_stats``);
 * ``trace s``: one trace of a small retina after the build (it must not depend on the scene's
   size beyond tracing).
@@ -123,6 +125,11 @@ def run_one(name: str, repeat: int) -> dict:
                 del es
             out["embree_s"] = statistics.median(times)
             del v32, s32
+    # One tiny build first: the costs of a process's first build are not the mesh's.
+    tiny = ndtrace.Scene(dim).set_camera(**camera(dim)).add_object("simplex")
+    tiny.compiled()
+    ndtrace.trace(tiny)
+    del tiny
     base = _peak()
     times = []
     for _ in range(repeat):

@@ -212,55 +212,79 @@ def test_the_bindings_read_any_layout_in_index_order():
         assert np.array_equal(depth(vv, ss), want, equal_nan=True)
 
 
-def test_lendable_is_read_only_down_to_an_owner_that_cannot_change():
+def _in_bytes(a):
+    return np.frombuffer(a.tobytes(), a.dtype).reshape(a.shape)
+
+
+def _bytes_of(a):
+    while not isinstance(a, bytes):
+        a = a.base
+    return a
+
+
+def test_only_numbers_in_bytes_are_lendable():
     a = np.arange(12.0).reshape(4, 3)
     assert not _ndtrace.lendable(a)  # writeable
     owned = a.copy()
     owned.setflags(write=False)
-    assert _ndtrace.lendable(owned)
-    view = a.view()
-    view.setflags(write=False)
-    assert not _ndtrace.lendable(view)  # its owner is writeable
-    ro_view = owned[1:]
-    assert _ndtrace.lendable(ro_view)
-    assert _ndtrace.lendable(np.frombuffer(bytes(96)))  # bytes cannot change
+    assert not _ndtrace.lendable(owned)  # its memory can change (resize, setflags, a view)
+    in_bytes = _in_bytes(a)
+    assert _ndtrace.lendable(in_bytes) and _ndtrace.lendable(in_bytes[1:])
+    assert not _ndtrace.lendable(in_bytes[:, ::2])  # not C-ordered
     mutable = np.frombuffer(bytearray(96))
     mutable.setflags(write=False)
-    assert not _ndtrace.lendable(mutable)  # the bytearray can
+    assert not _ndtrace.lendable(mutable)  # the bytearray can change
+
+    class Lie(np.ndarray):
+        base = property(lambda self: bytes(96))
+
+    liar = owned.view(Lie)
+    assert not _ndtrace.lendable(liar)  # its memory is not in the bytes it names
     assert not _ndtrace.lendable([1.0, 2.0])
 
 
-def test_a_read_only_array_is_shared_and_read_in_place():
+def test_the_scene_snapshots_in_bytes_and_the_core_reads_them_in_place():
+    import sys
+
     v, s, values = _mesh()
-    v, s, values = v.copy(), s.astype(np.int64), values.copy()  # each owns its memory
-    for a in (v, s, values):
-        a.setflags(write=False)
-    scene = _scene(v, s, values)
+    given = _in_bytes(v)
+    scene = _scene(given, s, values)
     obj = scene._data["objects"][0]
-    # No snapshot: the caller's read-only arrays are the scene's.
-    assert obj["vertices"] is v and obj["simplices"] is s and obj["values"] is values
-    _same_trace(scene, _scene(v.tolist(), s.tolist(), values.tolist()))
+    # Numbers already in bytes are their own snapshot; the others are snapshot in bytes once.
+    assert obj["vertices"] is given
+    assert all(_ndtrace.lendable(obj[k]) for k in ("vertices", "simplices", "values"))
+    held = [_bytes_of(obj[k]) for k in ("vertices", "simplices", "values")]
+    before = [sys.getrefcount(b) for b in held]
     compiled = scene.compiled()
-    # The core reads the array's memory, not a copy of it: a caller who breaks the promise
-    # and writes to it shows that (the description reads the new number).
-    v.setflags(write=True)
-    v[0, 0] += 1.0
-    assert compiled.to_dict()["objects"][0]["vertices"][0, 0] == v[0, 0]
-    # A writeable array is copied: the description keeps the old number.
-    w = v.copy()
-    copied = _scene(w, s, values).compiled()
-    w[0, 0] += 1.0
-    assert copied.to_dict()["objects"][0]["vertices"][0, 0] == v[0, 0]
+    # The core holds each bytes object (one reference each) instead of copying its numbers.
+    assert [sys.getrefcount(b) for b in held] == [n + 1 for n in before]
+    _same_trace(scene, _scene(v.tolist(), s.tolist(), values.tolist()))
+    del compiled
+    scene.set_render(samples=1)
+    import gc
+
+    gc.collect()
+    assert [sys.getrefcount(b) for b in held] == before
 
 
-def test_the_core_keeps_a_lent_array_alive():
+def test_memory_the_caller_can_still_change_is_copied():
+    v, s, values = _mesh()
+    owned = v.copy()
+    early_view = owned[:]  # made before the array is made read-only
+    owned.setflags(write=False)
+    compiled = _scene(owned, s, values).compiled()
+    early_view[0, 0] += 1.0
+    owned.setflags(write=True)
+    owned[1, 0] += 1.0
+    got = compiled.to_dict()["objects"][0]["vertices"]
+    assert got[0, 0] == v[0, 0] and got[1, 0] == v[1, 0]
+
+
+def test_the_core_keeps_lent_numbers_alive():
     import gc
 
     def compiled():
         v, s, values = _mesh()
-        v, s = v.copy(), s.astype(np.int64)
-        v.setflags(write=False)
-        s.setflags(write=False)
         return _scene(v, s, values).compiled(), v.copy(), s.copy()
 
     c, v, s = compiled()  # the scene and its arrays are gone but for the core's references

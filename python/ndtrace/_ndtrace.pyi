@@ -118,8 +118,9 @@ def load_dict(
     like: CompiledScene | None = None,
 ) -> CompiledScene: ...
 def lendable(value: object) -> bool:
-    """Whether a numpy array's memory can be lent to a scene without a copy: read-only and
-    aligned, as is every array it views, down to one that owns its memory or views ``bytes``."""
+    """Whether the loader reads a numpy array's numbers in place instead of copying them: a
+    C-ordered, aligned array whose numbers lie in a ``bytes`` object (``np.frombuffer`` of
+    bytes, or a view of one), which cannot change."""
 
 # -- meshes ---------------------------------------------------------------------------
 

@@ -43,12 +43,12 @@ _ARRAY_PATH = re.compile(r"objects\[\d+\]\.(" + "|".join(_ARRAY_KEYS) + ")")
 
 def _snapshot(path: str, key: str, value: np.ndarray) -> np.ndarray | None:
     """The array at an object's ``key`` as the one C-ordered array the loader takes (a
-    read-only snapshot: the scene must not change when the caller's array does, and copies of
-    the scene can then share it), or None when it is not one (lists then, and the loader says
-    what is wrong, as for the equal lists). An array that is read-only down to its owner
-    (:func:`_ndtrace.lendable`) is its own snapshot: no copy is made, and the loader reads its
-    memory in place. Masked entries of a float array are NaN (refused, located, by the
-    loader); masked indices and rows of no numbers go as lists."""
+    snapshot in ``bytes``: the scene must not change when the caller's array does, copies of
+    the scene can then share it, and the loader reads it in place), or None when it is not one
+    (lists then, and the loader says what is wrong, as for the equal lists). An array whose
+    numbers already lie in ``bytes`` (a snapshot, or ``np.frombuffer`` of bytes) is its own
+    snapshot: no copy is made. Masked entries of a float array are NaN (refused, located, by
+    the loader); masked indices and rows of no numbers go as lists."""
     ndim, dtype = _ARRAY_KEYS[key]
     if key == "field":
         a = _field(path, value)
@@ -65,14 +65,16 @@ def _snapshot(path: str, key: str, value: np.ndarray) -> np.ndarray | None:
             a = np.ascontiguousarray(value.astype(np.float64).filled(np.nan))
         else:
             a = np.ascontiguousarray(value, dtype=dtype)
-    if a is value and _ndtrace.lendable(a):
-        # Read-only down to its owner (a snapshot already, or the caller's read-only array):
-        # shared as it is, and lent to the loader without a copy.
+    return _in_bytes(a)
+
+
+def _in_bytes(a: np.ndarray) -> np.ndarray:
+    """``a`` (C-ordered) as a read-only array whose numbers lie in a ``bytes`` object, which
+    nothing can change: ``a`` itself when they already do (:func:`_ndtrace.lendable`), else
+    one copy. The loader reads such an array in place, without a copy of its own."""
+    if _ndtrace.lendable(a):
         return a
-    if np.may_share_memory(a, value):
-        a = a.copy()
-    a.setflags(write=False)
-    return a
+    return np.frombuffer(a.tobytes(), dtype=a.dtype).reshape(a.shape)
 
 
 #: Deeper nesting than any scene has (a list of rows of numbers is three levels).
@@ -116,13 +118,13 @@ def _copy_tree(value: Any) -> Any:
 
 
 def _freeze_arrays(data: dict) -> dict:
-    """Makes the arrays of a description's objects read-only (as :func:`_plain` makes them), so
-    that copies share them."""
+    """Makes the arrays of a description's objects read-only snapshots in ``bytes`` (as
+    :func:`_plain` makes them), so that copies share them and the loader reads them in place."""
     for o in data.get("objects", []):
         if isinstance(o, dict):
             for key in _ARRAY_KEYS:
                 if isinstance(o.get(key), np.ndarray):
-                    o[key].setflags(write=False)
+                    o[key] = _in_bytes(np.ascontiguousarray(o[key]))
     return data
 
 

@@ -11,7 +11,8 @@ use ndtrace::scene::SceneDesc;
 use ndtrace::NdError;
 use numpy::ndarray::ArrayViewD;
 use numpy::{
-    Element, PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
+    Element, PyArray1, PyArrayDescrMethods, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray,
+    PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
@@ -181,20 +182,24 @@ fn table<T: Number>(width: usize, values: Shared<T>) -> Result<Table<T>, String>
         .ok_or_else(|| format!("an array of {rows} rows of {width} with a wrong number of values"))
 }
 
-/// The numbers of an array of `T` in C order, lent without a copy when the array is
-/// [`lendable`], else copied once into a buffer of the description's own; `None` for another
-/// dtype.
+/// The numbers of an array of `T` in C order: lent without a copy when they lie in a `bytes`
+/// object ([`owning_bytes`]), else copied once into a buffer of the description's own; `None`
+/// for another dtype.
 fn flat<T: Element + Number>(value: &Bound<'_, PyAny>) -> Option<Shared<T>> {
     let a = value.extract::<PyReadonlyArrayDyn<'_, T>>().ok()?;
     // `as_slice` also takes Fortran-ordered memory as it lies: only a C-ordered array's is
     // its C order.
     Some(match a.as_slice() {
-        Ok(s) if !s.is_empty() && a.is_c_contiguous() && lendable(value) => Shared::lent(Lent {
-            _array: value.clone().unbind(),
-            ptr: s.as_ptr(),
-            len: s.len(),
-        }),
-        Ok(s) if a.is_c_contiguous() => s.to_vec().into(),
+        Ok(s) if a.is_c_contiguous() => {
+            match owning_bytes(value, s.as_ptr().cast(), size_of_val(s)) {
+                Some(bytes) if s.as_ptr().is_aligned() => Shared::lent(Lent {
+                    _bytes: bytes.unbind(),
+                    ptr: s.as_ptr(),
+                    len: s.len(),
+                }),
+                _ => s.to_vec().into(),
+            }
+        }
         _ => {
             let view: ArrayViewD<'_, T> = a.as_array();
             view.iter().copied().collect::<Vec<T>>().into()
@@ -202,53 +207,71 @@ fn flat<T: Element + Number>(value: &Bound<'_, PyAny>) -> Option<Shared<T>> {
     })
 }
 
-/// A read-only numpy array's numbers, lent to the description: holding the array keeps its
-/// memory alive, and nothing writes to it ([`lendable`]).
+/// Numbers lent to the description by a `bytes` object, which is immutable: holding it keeps
+/// them alive and unchanged, whatever becomes of the array that viewed them.
 struct Lent<T> {
-    _array: Py<PyAny>,
+    _bytes: Py<PyBytes>,
     ptr: *const T,
     len: usize,
 }
 
-// SAFETY: the numbers are never written while the array is held (`lendable`), so they may be
-// read from any thread; the array object is only dropped, which pyo3 defers to a thread that
-// holds the GIL.
+// SAFETY: the numbers lie in the held `bytes` object ([`owning_bytes`] checks it), which
+// nothing writes to, so they may be read from any thread; the object is only dropped, which
+// pyo3 defers to a thread that holds the GIL.
 unsafe impl<T: Sync> Send for Lent<T> {}
 unsafe impl<T: Sync> Sync for Lent<T> {}
 
 impl<T> AsRef<[T]> for Lent<T> {
     fn as_ref(&self) -> &[T] {
-        // SAFETY: `ptr` and `len` are the slice of the held array's memory (see `flat`).
+        // SAFETY: `ptr` (aligned) and `len` are a slice of the held bytes' memory (see `flat`).
         unsafe { std::slice::from_raw_parts(self.ptr, self.len) }
     }
 }
 
-/// Whether the memory of `value`, a numpy array, can be lent to a description without a copy:
-/// it is read-only and aligned, and so is every array it is a view of, down to one that owns
-/// its memory or views a `bytes` object (immutable). Such an array stays unchanged unless its
-/// owner is made writeable again (`setflags(write=True)`), which the Python API documents
-/// against. The Python `Scene` asks this before it snapshots an array (`_snapshot`).
-#[pyfunction]
-pub(crate) fn lendable(value: &Bound<'_, PyAny>) -> bool {
-    let flag = |a: &Bound<'_, PyAny>, name: &str| -> Option<bool> {
-        a.getattr("flags").ok()?.getattr(name).ok()?.extract().ok()
-    };
+/// The `bytes` object that holds the `size` bytes at `data` (the memory of the numpy array
+/// `value`), found along the array's `base` chain and checked to contain them; `None` when
+/// there is none (or `size` is 0). Only such memory is lent: a `bytes` object cannot change,
+/// while an array's own memory can (through an older view, `resize`, `__setstate__`, or after
+/// `setflags(write=True)`). A `base` that lies cannot fool the check: the memory must lie
+/// within the object found.
+fn owning_bytes<'py>(
+    value: &Bound<'py, PyAny>,
+    data: *const u8,
+    size: usize,
+) -> Option<Bound<'py, PyBytes>> {
     let mut a = value.clone();
-    loop {
-        if a.cast::<PyUntypedArray>().is_err()
-            || flag(&a, "writeable") != Some(false)
-            || flag(&a, "aligned") != Some(true)
-        {
-            return false;
+    // Views of views end in a few steps (numpy collapses chains of views); the bound stops a
+    // `base` that loops.
+    for _ in 0..64 {
+        let base = a.getattr("base").ok()?;
+        if let Ok(bytes) = base.cast_exact::<PyBytes>() {
+            let held = bytes.as_bytes().as_ptr_range();
+            let range = data..data.wrapping_add(size);
+            return (size > 0 && held.start <= range.start && range.end <= held.end)
+                .then(|| bytes.clone());
         }
-        let Ok(base) = a.getattr("base") else {
-            return false;
-        };
-        if base.is_none() || base.is_exact_instance_of::<PyBytes>() {
-            return true;
-        }
+        base.cast::<PyUntypedArray>().ok()?;
         a = base;
     }
+    None
+}
+
+/// Whether the loader reads the numbers of `value`, a C-ordered, aligned numpy array, in place
+/// instead of copying them: whether they lie in a `bytes` object (`np.frombuffer(b)` of bytes
+/// `b`, or a view of one), which cannot change. The Python `Scene` keeps its snapshots of
+/// arrays in `bytes` and asks this before it makes one (`_snapshot`).
+#[pyfunction]
+pub(crate) fn lendable(value: &Bound<'_, PyAny>) -> bool {
+    let Ok(a) = value.cast::<PyUntypedArray>() else {
+        return false;
+    };
+    if !a.is_c_contiguous() || !a.is_aligned() {
+        return false;
+    }
+    let size = a.len() * a.dtype().itemsize();
+    // SAFETY: reads the data pointer of a live array object.
+    let data = unsafe { (*a.as_array_ptr()).data } as *const u8;
+    owning_bytes(value, data, size).is_some()
 }
 
 /// Puts the arrays taken by [`take_arrays`] into the deserialized description.

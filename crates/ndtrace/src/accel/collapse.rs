@@ -304,9 +304,10 @@ pub(super) fn wide_tree<const N: usize>(
         blocks: pending,
         cells: made,
         cell_links,
+        plan,
         ..
     } = c;
-    drop(bin);
+    drop((bin, plan));
     nodes.shrink_to_fit();
     let blocks = pending
         .par_iter()
