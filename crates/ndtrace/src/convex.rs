@@ -5,7 +5,8 @@
 //! hyperplane (section "Clipping": every vertex is on the inner side of every facet), so a ray
 //! that starts on F's plane and runs into the open outer half-space never meets K again: a
 //! shadow ray from a hit on F toward a light on F's outer side needs no test against K (see
-//! [`crate::render`]). [`convex_side`] decides this for a mesh, in time O(S·N²·log S).
+//! [`crate::render`]). [`convex_side`] decides this for a mesh, in time O(S·N²) for meshes
+//! whose vertices each lie in a bounded number of simplices.
 //!
 //! The generated simplex, hypercube and cross-polytope are convex by construction, and an
 //! affine map keeps them so (up to the rounding of the mapped coordinates, ~10⁻¹⁶ of the scene,
@@ -38,7 +39,7 @@
 
 use crate::geometry::{barycentric, generalized_cross, Hyperplane};
 use crate::linalg::{add, dot, norm, scale, sub, Vector};
-use crate::mesh::{orientation::ridge, Mesh};
+use crate::mesh::{orientation::ridges, Mesh};
 use rayon::prelude::*;
 
 /// The interior point must lie at least `MARGIN`·D inside every simplex's hyperplane.
@@ -146,29 +147,22 @@ pub fn convex_side<const N: usize>(
     {
         return None;
     }
-    // 2 and 3. Ridges, as (hash of the sorted vertex indices, simplex·N + omitted slot), sorted
-    // so that the two simplices of a ridge are neighbours. A run of equal hashes must be one
-    // ridge of two simplices (a hash collision only makes the certificate fail).
-    let mut ridges: Vec<(u64, u64)> = (0..s.len() * N)
-        .into_par_iter()
-        .map(|r| (ridge(&s[r / N], r % N).0, r as u64))
-        .collect();
-    ridges.par_sort_unstable();
-    // The vertex of simplex b's ridge slot opposite the ridge, strictly inside simplex a's
+    // 2 and 3. Every ridge of exactly two simplices that agree on it ([`ridges`]), and the
+    // vertex of each opposite their ridge (the one the other lacks) strictly inside the other's
     // hyperplane.
+    let r = ridges(mesh).ok()?;
+    if !r.closed() {
+        return None;
+    }
     let convex_pair = |a: usize, b: usize| {
-        let opposite = &mesh.vertices[s[b / N][b % N] as usize];
-        out * planes[a / N].distance(opposite) < -strict
+        let lacked = s[b].iter().find(|v| !s[a].contains(v));
+        lacked.is_some_and(|&v| out * planes[a].distance(&mesh.vertices[v as usize]) < -strict)
     };
-    let ok = ridges.par_chunk_by(|a, b| a.0 == b.0).all(|run| {
-        let [(_, a), (_, b)] = run else {
-            return false;
-        };
-        let (a, b) = (*a as usize, *b as usize);
-        let ((_, ka, odd_a), (_, kb, odd_b)) = (ridge(&s[a / N], a % N), ridge(&s[b / N], b % N));
-        ka == kb && odd_a != odd_b && convex_pair(a, b) && convex_pair(b, a)
+    let ok = r.pairs.par_iter().all(|&(a, b, agree)| {
+        let (a, b) = (a as usize, b as usize);
+        agree && convex_pair(a, b) && convex_pair(b, a)
     });
-    drop(ridges);
+    drop(r);
     if !ok {
         return None;
     }
