@@ -84,9 +84,9 @@ MAX_DEPTH = 32
 def _plain(value: Any, path: str = "", depth: int = 0) -> Any:
     """Nested numpy arrays and scalars → lists and Python numbers (for the Rust loader), except
     the mesh and field arrays of objects (:data:`_ARRAY_KEYS`), which stay one C-ordered array
-    each (the loader reads a read-only one in place; a million numbers as lists would cost
-    about 100 bytes each). A container nested deeper than :data:`MAX_DEPTH` (one that contains itself, say) is
-    a ValueError naming where."""
+    each, a snapshot in ``bytes`` the loader reads in place (a million numbers as lists would
+    cost about 100 bytes each). A container nested deeper than :data:`MAX_DEPTH` (one that
+    contains itself, say) is a ValueError naming where."""
     if depth > MAX_DEPTH:
         raise ValueError(f"{path or 'the scene'}: nested more than {MAX_DEPTH} levels deep "
                          "(a list or dict that contains itself?)")

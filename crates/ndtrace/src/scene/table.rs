@@ -6,8 +6,8 @@
 //! numbers (what it becomes on a TOML round trip), and is written as those lists.
 //!
 //! A buffer ([`Shared`]) is the description's own, or lent by an owner that keeps it alive and
-//! unchanged: the bindings lend a read-only numpy array's memory, so that a mesh goes from
-//! numpy to the build without a copy.
+//! unchanged: the bindings lend the memory of a numpy array whose numbers lie in a `bytes`
+//! object, so that a mesh goes from the Python scene's snapshot to the build without a copy.
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::borrow::Cow;
@@ -33,8 +33,8 @@ impl Number for i64 {
 }
 
 /// An immutable buffer of numbers, shared between copies of the description: its own (from a
-/// `Vec` or an `Arc<[T]>`), or lent ([`Shared::lent`]) by an owner that keeps the memory alive
-/// and unchanged for as long as it is held.
+/// `Vec`), or lent ([`Shared::lent`]) by an owner that keeps the memory alive and unchanged for
+/// as long as it is held.
 #[derive(Clone)]
 pub struct Shared<T: 'static>(Arc<dyn AsRef<[T]> + Send + Sync>);
 
@@ -60,12 +60,6 @@ impl<T: 'static> std::ops::Deref for Shared<T> {
 
 impl<T: Number> From<Vec<T>> for Shared<T> {
     fn from(v: Vec<T>) -> Self {
-        Shared(Arc::new(v))
-    }
-}
-
-impl<T: Number> From<Arc<[T]>> for Shared<T> {
-    fn from(v: Arc<[T]>) -> Self {
         Shared(Arc::new(v))
     }
 }
