@@ -64,20 +64,20 @@ impl<const N: usize> NodeBounds<N> {
     #[inline(always)]
     fn grow(&mut self, r: &Ref<N>) {
         for i in 0..N {
-            self.bmin[i] = self.bmin[i].min(r.lo[i]);
-            self.bmax[i] = self.bmax[i].max(r.hi[i]);
+            self.bmin[i] = lesser(self.bmin[i], r.lo[i]);
+            self.bmax[i] = greater(self.bmax[i], r.hi[i]);
             let c = r.centre2(i);
-            self.cmin[i] = self.cmin[i].min(c);
-            self.cmax[i] = self.cmax[i].max(c);
+            self.cmin[i] = lesser(self.cmin[i], c);
+            self.cmax[i] = greater(self.cmax[i], c);
         }
     }
 
     fn merge(mut self, o: Self) -> Self {
         for i in 0..N {
-            self.bmin[i] = self.bmin[i].min(o.bmin[i]);
-            self.bmax[i] = self.bmax[i].max(o.bmax[i]);
-            self.cmin[i] = self.cmin[i].min(o.cmin[i]);
-            self.cmax[i] = self.cmax[i].max(o.cmax[i]);
+            self.bmin[i] = lesser(self.bmin[i], o.bmin[i]);
+            self.bmax[i] = greater(self.bmax[i], o.bmax[i]);
+            self.cmin[i] = lesser(self.cmin[i], o.cmin[i]);
+            self.cmax[i] = greater(self.cmax[i], o.cmax[i]);
         }
         self
     }
@@ -110,8 +110,8 @@ impl<const N: usize> SahBin<N> {
     fn grow(&mut self, lo: &[f32; N], hi: &[f32; N], count: u32) {
         self.count += count;
         for i in 0..N {
-            self.min[i] = self.min[i].min(lo[i]);
-            self.max[i] = self.max[i].max(hi[i]);
+            self.min[i] = lesser(self.min[i], lo[i]);
+            self.max[i] = greater(self.max[i], hi[i]);
         }
     }
 
@@ -146,23 +146,48 @@ fn bin_of(c: f32, cmin: f32, scale: f32) -> usize {
     (((c - cmin) * scale) as usize).min(BINS - 1)
 }
 
-/// Reorders `refs` so that the records satisfying `left` come first; returns their number.
-fn partition<const N: usize>(refs: &mut [Ref<N>], left: impl Fn(&Ref<N>) -> bool) -> usize {
-    let (mut i, mut j) = (0, refs.len());
-    loop {
-        while i < j && left(&refs[i]) {
-            i += 1;
-        }
-        while i < j && !left(&refs[j - 1]) {
-            j -= 1;
-        }
-        if i >= j {
-            return i;
-        }
-        refs.swap(i, j - 1);
-        i += 1;
-        j -= 1;
+/// `min(acc, x)` for an `acc` that is not NaN: a NaN `x` is ignored, as [`f32::min`] ignores
+/// it, and a tie keeps `acc`. One `minss` where `f32::min` needs four instructions to handle a
+/// NaN `acc` (which the build never has: boxes are never NaN, and a NaN centre is never taken).
+#[inline(always)]
+fn lesser(acc: f32, x: f32) -> f32 {
+    if x < acc {
+        x
+    } else {
+        acc
     }
+}
+
+/// `max(acc, x)` for an `acc` that is not NaN (see [`lesser`]).
+#[inline(always)]
+fn greater(acc: f32, x: f32) -> f32 {
+    if x > acc {
+        x
+    } else {
+        acc
+    }
+}
+
+/// Reorders `refs` so that the records satisfying `left` come first; returns their number and
+/// the bounds of both sides (`[left, right]`), exactly [`NodeBounds::of`] each.
+///
+/// Without branches on the side (which is as good as random to a branch predictor): every
+/// record is swapped with the first record of the right side so far, which advances by one
+/// when it was a left record (refs`[..j]` are left records, refs`[j..i]` right ones).
+fn partition<const N: usize>(
+    refs: &mut [Ref<N>],
+    left: impl Fn(&Ref<N>) -> bool,
+) -> (usize, [NodeBounds<N>; 2]) {
+    let mut j = 0;
+    for i in 0..refs.len() {
+        let r = refs[i];
+        let is_left = left(&r);
+        refs[i] = refs[j];
+        refs[j] = r;
+        j += usize::from(is_left);
+    }
+    let (l, r) = refs.split_at(j);
+    (j, [NodeBounds::of(l), NodeBounds::of(r)])
 }
 
 /// A binary subtree built in parallel: either a flat run of nodes (child indices relative to its
@@ -193,26 +218,35 @@ impl Builder {
         }
     }
 
-    fn bin_seq<const N: usize>(refs: &[Ref<N>], cmin: &[f32; N], scale: &[f32; N]) -> SahBins<N> {
-        let bin_into = |bins: &mut SahBins<N>, r: &Ref<N>| {
-            for a in 0..N {
-                if scale[a] > 0.0 {
-                    bins[a][bin_of(r.centre2(a), cmin[a], scale[a])].grow(&r.lo, &r.hi, 1);
-                }
+    /// Adds the record `r` to its bin on every axis that is binned (`scale` > 0).
+    #[inline(always)]
+    fn bin_into<const N: usize>(
+        bins: &mut SahBins<N>,
+        r: &Ref<N>,
+        cmin: &[f32; N],
+        scale: &[f32; N],
+    ) {
+        for a in 0..N {
+            if scale[a] > 0.0 {
+                bins[a][bin_of(r.centre2(a), cmin[a], scale[a])].grow(&r.lo, &r.hi, 1);
             }
-        };
+        }
+    }
+
+    fn bin_seq<const N: usize>(refs: &[Ref<N>], cmin: &[f32; N], scale: &[f32; N]) -> SahBins<N> {
         let mut bins = [[SahBin::EMPTY; BINS]; N];
         if refs.len() < 2 * BINS {
-            refs.iter().for_each(|r| bin_into(&mut bins, r));
+            refs.iter()
+                .for_each(|r| Self::bin_into(&mut bins, r, cmin, scale));
             return bins;
         }
         // Neighbouring records mostly fall into the same bins: two sets of bins, alternating,
         // halve the chains of updates to one bin (counts and min/max merge exactly).
         let mut odd = [[SahBin::EMPTY; BINS]; N];
         for pair in refs.chunks(2) {
-            bin_into(&mut bins, &pair[0]);
+            Self::bin_into(&mut bins, &pair[0], cmin, scale);
             if let Some(r) = pair.get(1) {
-                bin_into(&mut odd, r);
+                Self::bin_into(&mut odd, r, cmin, scale);
             }
         }
         merge_bins(bins, &odd)
@@ -235,14 +269,15 @@ impl Builder {
     }
 
     /// Chooses how to split the node over `refs` and partitions them accordingly: `None` for a
-    /// leaf (at most `MAX_LEAF` simplices: a block tests them at the price of one), `Some(mid)`
-    /// for children `refs[..mid]` and `refs[mid..]` (both non-empty).
+    /// leaf (at most `MAX_LEAF` simplices: a block tests them at the price of one),
+    /// `Some((mid, [left, right]))` for children `refs[..mid]` and `refs[mid..]` (both
+    /// non-empty) with their bounds.
     fn split<const N: usize>(
         &self,
         refs: &mut [Ref<N>],
         info: &NodeBounds<N>,
         depth: usize,
-    ) -> Option<usize> {
+    ) -> Option<(usize, [NodeBounds<N>; 2])> {
         let n = refs.len();
         // A flat cell is a leaf alone (it is one child reference).
         if n == 1 || (n <= MAX_LEAF && refs.iter().all(|r| r.id < self.cells_from)) {
@@ -298,9 +333,9 @@ impl Builder {
             }
             if let Some((_, a, s)) = best {
                 let (cmin, sc) = (info.cmin[a], scale[a]);
-                let mid = partition(refs, |r| bin_of(r.centre2(a), cmin, sc) < s);
+                let (mid, sides) = partition(refs, |r| bin_of(r.centre2(a), cmin, sc) < s);
                 debug_assert!(mid > 0 && mid < n);
-                return Some(mid);
+                return Some((mid, sides));
             }
         }
         // Object-median split on the axis of largest centre extent (ties: lowest axis, then
@@ -317,7 +352,8 @@ impl Builder {
                 .total_cmp(&q.centre2(axis))
                 .then(p.id.cmp(&q.id))
         });
-        Some(mid)
+        let (l, r) = refs.split_at(mid);
+        Some((mid, [NodeBounds::of(l), NodeBounds::of(r)]))
     }
 
     fn node<const N: usize>(info: &NodeBounds<N>) -> BinaryNode<N> {
@@ -329,57 +365,57 @@ impl Builder {
         }
     }
 
-    /// Sequential build of the subtree over `refs` (at position `offset` of the final order),
-    /// appending to `out` with node indices relative to the start of `out`.
+    /// Sequential build of the subtree over `refs` (at position `offset` of the final order;
+    /// `info` their bounds), appending to `out` with node indices relative to the start of `out`.
     fn build_seq<const N: usize>(
         &self,
         refs: &mut [Ref<N>],
+        info: &NodeBounds<N>,
         offset: usize,
         depth: usize,
         out: &mut Vec<BinaryNode<N>>,
     ) {
-        let info = NodeBounds::of(refs);
         let me = out.len();
-        out.push(Self::node(&info));
-        match self.split(refs, &info, depth) {
+        out.push(Self::node(info));
+        match self.split(refs, info, depth) {
             None => {
                 out[me].first = offset as u32;
                 out[me].count = refs.len() as u32;
             }
-            Some(mid) => {
+            Some((mid, [li, ri])) => {
                 let (l, r) = refs.split_at_mut(mid);
-                self.build_seq(l, offset, depth + 1, out);
+                self.build_seq(l, &li, offset, depth + 1, out);
                 out[me].first = out.len() as u32;
-                self.build_seq(r, offset + mid, depth + 1, out);
+                self.build_seq(r, &ri, offset + mid, depth + 1, out);
             }
         }
     }
 
-    /// Build of the subtree over `refs`, forking with rayon for large nodes.
+    /// Build of the subtree over `refs` (bounds `info`), forking with rayon for large nodes.
     fn build_par<const N: usize>(
         &self,
         refs: &mut [Ref<N>],
+        info: &NodeBounds<N>,
         offset: usize,
         depth: usize,
     ) -> BuiltSubtree<N> {
         if refs.len() < self.par_min {
             let mut out = Vec::with_capacity(refs.len() / 2 + 1);
-            self.build_seq(refs, offset, depth, &mut out);
+            self.build_seq(refs, info, offset, depth, &mut out);
             return BuiltSubtree::Flat(out);
         }
-        let info = self.info(refs);
-        let mut node = Self::node(&info);
-        match self.split(refs, &info, depth) {
+        let mut node = Self::node(info);
+        match self.split(refs, info, depth) {
             None => {
                 node.first = offset as u32;
                 node.count = refs.len() as u32;
                 BuiltSubtree::Flat(vec![node])
             }
-            Some(mid) => {
+            Some((mid, [li, ri])) => {
                 let (l, r) = refs.split_at_mut(mid);
                 let (bl, br) = rayon::join(
-                    || self.build_par(l, offset, depth + 1),
-                    || self.build_par(r, offset + mid, depth + 1),
+                    || self.build_par(l, &li, offset, depth + 1),
+                    || self.build_par(r, &ri, offset + mid, depth + 1),
                 );
                 BuiltSubtree::Split(node, Box::new(bl), Box::new(br))
             }
@@ -437,7 +473,8 @@ pub(super) fn binary_tree<const N: usize>(
         par_min: par_min.max(2),
         cells_from,
     };
-    let built = builder.build_par(&mut refs, 0, 0);
+    let info = builder.info(&refs);
+    let built = builder.build_par(&mut refs, &info, 0, 0);
     let idx = refs.par_iter().map(|r| r.id).collect();
     drop(refs);
     let mut bin = Vec::new();
