@@ -39,7 +39,7 @@
 
 use crate::geometry::{barycentric, generalized_cross, Hyperplane};
 use crate::linalg::{add, dot, norm, scale, sub, Vector};
-use crate::mesh::{orientation::ridges, Mesh};
+use crate::mesh::{orientation::matched_ridges, Mesh};
 use rayon::prelude::*;
 
 /// The interior point must lie at least `MARGIN`·D inside every simplex's hyperplane.
@@ -147,10 +147,10 @@ pub fn convex_side<const N: usize>(
     {
         return None;
     }
-    // 2 and 3. Every ridge of exactly two simplices that agree on it ([`ridges`]), and the
+    // 2 and 3. Every ridge of exactly two simplices that agree on it (`matched_ridges`), and the
     // vertex of each opposite their ridge (the one the other lacks) strictly inside the other's
     // hyperplane.
-    let r = ridges(mesh).ok()?;
+    let r = matched_ridges(mesh).ok()?;
     if !r.closed() {
         return None;
     }

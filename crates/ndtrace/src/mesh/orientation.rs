@@ -72,6 +72,13 @@ impl Ridges {
     pub fn consistent(&self) -> bool {
         self.pairs.iter().all(|p| p.2)
     }
+
+    /// With `pairs` and `boundary` sorted, as [`ridges`] gives them.
+    fn sorted(mut self) -> Self {
+        self.pairs.par_sort_unstable();
+        self.boundary.par_sort_unstable();
+        self
+    }
 }
 
 /// Why a mesh's orientation cannot be repaired.
@@ -109,6 +116,13 @@ impl std::fmt::Display for OrientError {
 /// parallel over runs of vertices. When a ridge belongs to more than two simplices, the error
 /// names the first such ridge in the order of the ridges' sorted vertices.
 pub fn ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
+    matched_ridges(mesh).map(Ridges::sorted)
+}
+
+/// [`ridges`] before `pairs` and `boundary` are sorted (they come in the order of the ridges'
+/// smallest vertices): for the callers that only ask whether every ridge is shared, or every
+/// pair agrees, and so need no sort of S·N/2 pairs.
+pub(crate) fn matched_ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
     let s = &mesh.simplices;
     let repeated = |idx: &[u32; N]| (1..N).any(|a| idx[..a].contains(&idx[a]));
     let degenerate: Vec<u32> = (0..s.len() as u32)
@@ -215,8 +229,6 @@ pub fn ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
         pairs.extend(p);
         boundary.extend(b);
     }
-    pairs.par_sort_unstable();
-    boundary.par_sort_unstable();
     Ok(Ridges {
         pairs,
         boundary,
@@ -384,12 +396,13 @@ fn enclosed_volume<const N: usize>(mesh: &Mesh<N>, members: &[usize], flip: &[bo
 /// pieces that [`orient`] flips (those facing inward); `None` for an open or consistent mesh.
 /// A closed mesh that cannot be oriented gives `Some((0, simplices))`.
 pub fn inconsistency<const N: usize>(mesh: &Mesh<N>) -> Option<(usize, usize)> {
-    let r = ridges(mesh).ok()?;
+    // Unsorted first: a closed, consistently oriented mesh needs no more.
+    let r = matched_ridges(mesh).ok()?;
     if !r.closed() || r.consistent() {
         return None;
     }
     let count = mesh.simplices.len();
-    match orient_along(mesh, &r) {
+    match orient_along(mesh, &r.sorted()) {
         Ok(repair) => Some((
             repair
                 .pieces
