@@ -15,6 +15,28 @@ def _started_as_command() -> bool:
         argv[i : i + 2] == ["-m", "ndtrace"] for i in range(len(argv)))
 
 
+def _interrupted_at_start_up(signum, frame) -> None:
+    """Ctrl-C while the command is still starting (importing numpy, the extension, the command
+    line's modules): exit as the command does when interrupted, without a traceback of the
+    import machinery. ``ndtrace.cli.main`` hands SIGINT back to Python once its own handling
+    is in place, so the whole start-up is covered, not only this module's imports.
+
+    It exits at once (``os._exit``): nothing has been written yet, and an exception raised
+    here could be turned into another one by the code it lands in (numpy's C import of
+    ``datetime`` reports any failure as an ``ImportError``, traceback and all)."""
+    _sys.stderr.write("\nndtrace: interrupted\n")
+    _sys.stderr.flush()
+    _os._exit(130)
+
+
+if _started_as_command():
+    import signal as _signal
+
+    try:
+        _signal.signal(_signal.SIGINT, _interrupted_at_start_up)
+    except ValueError:  # not the main thread: leave the signal alone
+        pass
+
 try:
     from . import _ndtrace
     from . import geometry
@@ -36,12 +58,10 @@ try:
     from . import viewer
     from .viewer import widget
 except KeyboardInterrupt:
-    # Ctrl-C while the command is still importing (numpy, the extension): exit as the command
-    # does when interrupted, without a traceback of the import machinery.
+    # Ctrl-C before the handler above was installed.
     if not _started_as_command():
         raise
-    _sys.stderr.write("\nndtrace: interrupted\n")
-    _sys.exit(130)
+    _interrupted_at_start_up(None, None)
 
 __version__: str = _ndtrace.__version__
 MIN_DIM: int = _ndtrace.MIN_DIM

@@ -502,6 +502,7 @@ def _render(args: argparse.Namespace, scene: Scene, animating: bool, turntable: 
 def main(argv: list[str] | None = None) -> None:
     given = sys.argv[1:] if argv is None else argv
     if given[:1] == ["view"]:  # a scene is a .toml or .py file, never "view"
+        signal.signal(signal.SIGINT, signal.default_int_handler)  # see below
         from .viewer.cli import main as view
 
         code = view(given[1:])
@@ -515,6 +516,9 @@ def main(argv: list[str] | None = None) -> None:
     for sig in (signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, _terminate)
     try:
+        # Ctrl-C is a KeyboardInterrupt again from here on (during start-up, ndtrace's import
+        # made it exit quietly with 130: `_interrupted_at_start_up`).
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         code = run(argv)
     except KeyboardInterrupt as e:
         name = str(e)
