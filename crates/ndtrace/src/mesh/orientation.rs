@@ -109,12 +109,11 @@ impl std::fmt::Display for OrientError {
 /// Matches the simplices of `mesh` along their ridges, in time O(S·N²) for meshes whose
 /// vertices each lie in a bounded number of simplices.
 ///
-/// Each ridge is filed under its smallest vertex index by a counting sort (no comparison sort
-/// over all S·N ridges): each of a few runs of simplices is sorted on its own, in parallel,
-/// and the ridges of one vertex are read run after run, so they come in increasing order of
-/// simplex whatever the number of runs. They are then matched by their sorted vertices, in
-/// parallel over runs of vertices. When a ridge belongs to more than two simplices, the error
-/// names the first such ridge in the order of the ridges' sorted vertices.
+/// Each ridge is filed under its smallest vertex index by a counting sort (a stable,
+/// sequential pass: no comparison sort over all S·N ridges); the ridges filed under one vertex
+/// are then matched by their sorted vertices, in parallel over runs of vertices. When a ridge
+/// belongs to more than two simplices, the error names the first such ridge in the order of
+/// the ridges' sorted vertices.
 pub fn ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
     matched_ridges(mesh).map(Ridges::sorted)
 }
@@ -137,55 +136,37 @@ pub(crate) fn matched_ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, O
             .unwrap_or(0)
     };
     let buckets = s.par_iter().flatten().max().map_or(0, |&m| m as usize + 1);
-    // Runs of simplices counting-sorted on their own (a few: each holds a counter per vertex).
-    // In run r, start[v]..start[v + 1] of `filed` are the ridges filed under vertex v, as
-    // simplex·N + omitted slot in increasing order.
-    let runs = rayon::current_num_threads().clamp(1, 4);
-    let per_run = s.len().div_ceil(runs).max(1);
-    let sorted: Vec<(Vec<usize>, Vec<u64>)> = (s.par_chunks(per_run).enumerate())
-        .map(|(r, chunk)| {
-            let first = r * per_run;
-            let mut start = vec![0usize; buckets + 1];
-            for idx in chunk.iter().filter(|idx| !repeated(idx)) {
-                for k in 0..N {
-                    start[low(idx, k) as usize + 1] += 1;
-                }
-            }
-            for v in 0..buckets {
-                start[v + 1] += start[v];
-            }
-            let mut filed = vec![0u64; start[buckets]];
-            for (i, idx) in chunk.iter().enumerate().filter(|(_, idx)| !repeated(idx)) {
-                for k in 0..N {
-                    let v = low(idx, k) as usize;
-                    filed[start[v]] = ((first + i) * N + k) as u64;
-                    start[v] += 1;
-                }
-            }
-            // Each start[v] has moved to the start of v + 1: one place back to the right.
-            start.rotate_right(1);
-            start[0] = 0;
-            (start, filed)
-        })
-        .collect();
-    // The ridges filed under vertices before v, over all runs.
-    let before = |v: usize| sorted.iter().map(|(start, _)| start[v]).sum::<usize>();
-    let total = before(buckets);
+    // start[v]..start[v + 1]: the ridges filed under vertex v, as simplex·N + omitted slot in
+    // increasing order. One sequential pass: a parallel sort of runs of simplices (tried) was
+    // barely faster and left its buffers in the allocator's per-thread arenas, beside the BVH
+    // that is built next.
+    let mut start = vec![0usize; buckets + 1];
+    for idx in s.iter().filter(|idx| !repeated(idx)) {
+        for k in 0..N {
+            start[low(idx, k) as usize + 1] += 1;
+        }
+    }
+    for v in 0..buckets {
+        start[v + 1] += start[v];
+    }
+    let mut filed = vec![0u64; start[buckets]];
+    for (i, idx) in s.iter().enumerate().filter(|(_, idx)| !repeated(idx)) {
+        for k in 0..N {
+            let v = low(idx, k) as usize;
+            filed[start[v]] = (i * N + k) as u64;
+            start[v] += 1;
+        }
+    }
+    // Each start[v] has moved to the start of v + 1: one place back to the right.
+    start.rotate_right(1);
+    start[0] = 0;
     // Runs of whole buckets of about equal size, matched in parallel and joined in order.
     let pieces = rayon::current_num_threads() * 8;
     let mut cuts = vec![0usize];
     for k in 1..pieces {
-        let want = total * k / pieces;
-        let (mut lo, mut hi) = (0, buckets);
-        while lo < hi {
-            let mid = (lo + hi) / 2;
-            if before(mid) < want {
-                lo = mid + 1;
-            } else {
-                hi = mid;
-            }
-        }
-        cuts.push(lo.max(*cuts.last().unwrap_or(&0)));
+        let want = filed.len() * k / pieces;
+        let v = start.partition_point(|&x| x < want).min(buckets);
+        cuts.push(v.max(*cuts.last().unwrap_or(&0)));
     }
     cuts.push(buckets);
     type Matched = (Vec<(u32, u32, bool)>, Vec<u32>);
@@ -196,13 +177,11 @@ pub(crate) fn matched_ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, O
             let mut run: Vec<([u32; N], bool, u32)> = vec![];
             for v in w[0]..w[1] {
                 run.clear();
-                for (start, filed) in &sorted {
-                    run.extend(filed[start[v]..start[v + 1]].iter().map(|&r| {
-                        let (simplex, slot) = ((r / N as u64) as usize, (r % N as u64) as usize);
-                        let (_, key, odd) = ridge(&s[simplex], slot);
-                        (key, odd, simplex as u32)
-                    }));
-                }
+                run.extend(filed[start[v]..start[v + 1]].iter().map(|&r| {
+                    let (simplex, slot) = ((r / N as u64) as usize, (r % N as u64) as usize);
+                    let (_, key, odd) = ridge(&s[simplex], slot);
+                    (key, odd, simplex as u32)
+                }));
                 run.sort_unstable();
                 for same in run.chunk_by(|a, b| a.0 == b.0) {
                     match same {
@@ -222,7 +201,7 @@ pub(crate) fn matched_ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, O
             Ok((pairs, boundary))
         })
         .collect();
-    drop(sorted);
+    drop(filed);
     let (mut pairs, mut boundary) = (vec![], vec![]);
     for m in matched {
         let (p, b) = m?;
@@ -595,7 +574,7 @@ mod tests {
             for (k, m) in meshes.iter().enumerate() {
                 let want = brute_force_ridges(m);
                 errors += usize::from(want.is_err());
-                // One run of simplices and several (the counting sort splits by threads).
+                // The matching splits its work by the number of threads: one and several.
                 for threads in [1, 3] {
                     let pool = rayon::ThreadPoolBuilder::new()
                         .num_threads(threads)
