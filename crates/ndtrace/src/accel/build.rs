@@ -169,11 +169,11 @@ fn greater(acc: f32, x: f32) -> f32 {
 }
 
 /// Reorders `refs` so that the records satisfying `left` come first; returns their number and
-/// the bounds of both sides (`[left, right]`), exactly [`NodeBounds::of`] each.
+/// the [`NodeBounds::of`] both sides (`[left, right]`).
 ///
 /// Without branches on the side (which is as good as random to a branch predictor): every
 /// record is swapped with the first record of the right side so far, which advances by one
-/// when it was a left record (refs`[..j]` are left records, refs`[j..i]` right ones).
+/// when it was a left record (`refs[..j]` are left records, `refs[j..i]` right ones).
 fn partition<const N: usize>(
     refs: &mut [Ref<N>],
     left: impl Fn(&Ref<N>) -> bool,
