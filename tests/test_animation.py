@@ -60,7 +60,9 @@ def test_turning_the_camera_equals_turning_the_world_the_other_way():
     for k in range(3):
         a, b = retina(frame_scene(cam, k)), retina(frame_scene(obj, k))
         np.testing.assert_array_equal(a.primitive_id, b.primitive_id)
-        np.testing.assert_allclose(a.depth[a.hit], b.depth[b.hit], rtol=1e-9)
+        # (The tree stores each simplex's rows rounded to f32, in world space here and there:
+        # the hit points differ by ~1e-7 of a simplex.)
+        np.testing.assert_allclose(a.depth[a.hit], b.depth[b.hit], rtol=1e-6)
         moved += int(np.sum(a.primitive_id != retina(frame_scene(cam, 0)).primitive_id))
     assert moved > 50, "the frames must actually differ"
 

@@ -10,7 +10,7 @@
 //!
 //! The generated simplex, hypercube and cross-polytope are convex by construction, and an
 //! affine map keeps them so (up to the rounding of the mapped coordinates, ~10⁻¹⁶ of the scene,
-//! far below the 10⁻⁷ by which shadow rays leave the surface); for them only step 1 runs. Any
+//! far below the 2·10⁻⁷ by which shadow rays leave the surface); for them only step 1 runs. Any
 //! other mesh must pass every step, each decided with a margin far above rounding error:
 //!
 //! 1. **Star-shaped, strictly.** An interior point c (the mean of the simplex centroids) lies

@@ -4,7 +4,9 @@
 use super::cell::{CellGeometry, FlatCell};
 use super::collapse::{id_ranges, wide_tree, CELL_MARK};
 use super::simplex::{simplex_bounds, Bounds, PreparedSimplex};
-use super::tree::{f32_down, f32_up, half_area, BinaryNode, Bvh, BLOCK_WIDTH, LEAF_TAG, MAX_LEAF};
+use super::tree::{
+    f32_down, f32_up, half_area, BinaryNode, Bvh, ExactSource, BLOCK_WIDTH, LEAF_TAG, MAX_LEAF,
+};
 use crate::mesh::Mesh;
 use rayon::prelude::*;
 
@@ -485,6 +487,8 @@ pub(super) fn binary_tree<const N: usize>(
 impl<const N: usize> Bvh<N> {
     /// Builds over prepared simplices; `ids[i]` is the caller's id of `prims[i]` (returned in
     /// [`Hit::prim`](crate::ray::Hit::prim)) and `bounds[i]` the (min, max) corners of its vertices.
+    /// The tree keeps `prims` (by id) as the source of its exact simplices ([`ExactSource`]);
+    /// the builds of a scene read them from its meshes instead.
     ///
     /// Deterministic: every decision depends only on the input (bins are integer counts and
     /// min/max, exact in any reduction order; ties go to the lowest axis, bin or index), and the
@@ -511,12 +515,15 @@ impl<const N: usize> Bvh<N> {
             prims.len() == ids.len(),
             "Bvh::build: prims, ids, bounds lengths differ"
         );
-        Self::build_from(ids, bounds, Vec::new(), |i, _| prims[i], par_min)
+        let by_id: std::collections::HashMap<u32, PreparedSimplex<N>> =
+            ids.iter().copied().zip(prims.iter().copied()).collect();
+        let exact = ExactSource::new(move |id| by_id[&id]);
+        Self::build_from(ids, bounds, Vec::new(), |i, _| prims[i], exact, par_min)
     }
 
     /// [`Bvh::build`] without a list of prepared simplices: `prepare(id)` gives the one with
     /// id `id` (a simplex that [`PreparedSimplex::new`] accepts), called once per simplex, in
-    /// parallel, when its block is filled. The same tree and blocks as `build` over the
+    /// parallel, when its block is filled, and kept as the tree's [`ExactSource`]. The same tree and blocks as `build` over the
     /// prepared simplices of `ids`, at the memory of the finished tree.
     ///
     /// # Panics
@@ -524,9 +531,9 @@ impl<const N: usize> Bvh<N> {
     pub fn build_lazily(
         ids: Vec<u32>,
         bounds: Vec<([f64; N], [f64; N])>,
-        prepare: impl Fn(u32) -> PreparedSimplex<N> + Sync,
+        prepare: impl Fn(u32) -> PreparedSimplex<N> + Send + Sync + 'static,
     ) -> Self {
-        Self::build_from(ids, bounds, Vec::new(), |_, id| prepare(id), PAR_MIN)
+        Self::build_lazily_with_cells(ids, bounds, Vec::new(), prepare)
     }
 
     /// [`Bvh::build_lazily`], with the simplices of each of `cells` held as one flat cell (see
@@ -542,9 +549,23 @@ impl<const N: usize> Bvh<N> {
         ids: Vec<u32>,
         bounds: Vec<([f64; N], [f64; N])>,
         cells: Vec<FlatCell<N>>,
+        prepare: impl Fn(u32) -> PreparedSimplex<N> + Send + Sync + 'static,
+    ) -> Self {
+        let exact = ExactSource::new(prepare);
+        let prepare = exact.0.clone();
+        Self::build_from(ids, bounds, cells, |_, id| prepare(id), exact, PAR_MIN)
+    }
+
+    /// [`Bvh::build_lazily_with_cells`] with a `prepare` that may borrow: the tree has no exact
+    /// source until [`Bvh::set_exact`] gives it one (the scene's, once its objects are shared).
+    pub(crate) fn build_with_cells_borrowing(
+        ids: Vec<u32>,
+        bounds: Vec<([f64; N], [f64; N])>,
+        cells: Vec<FlatCell<N>>,
         prepare: impl Fn(u32) -> PreparedSimplex<N> + Sync,
     ) -> Self {
-        Self::build_from(ids, bounds, cells, |_, id| prepare(id), PAR_MIN)
+        let fill = |_, id| prepare(id);
+        Self::build_from(ids, bounds, cells, fill, ExactSource::none(), PAR_MIN)
     }
 
     /// The build over `ids` and `bounds` with the flat `cells`; `prepare(i, ids[i])` gives
@@ -554,6 +575,7 @@ impl<const N: usize> Bvh<N> {
         bounds: Vec<([f64; N], [f64; N])>,
         cells: Vec<FlatCell<N>>,
         prepare: impl Fn(usize, u32) -> PreparedSimplex<N> + Sync,
+        exact: ExactSource<N>,
         par_min: usize,
     ) -> Self {
         let n = ids.len();
@@ -571,6 +593,8 @@ impl<const N: usize> Bvh<N> {
                 ranges: Vec::new(),
                 cells: Vec::new(),
                 cell_links: Vec::new(),
+                cell_prepared: Vec::new(),
+                exact,
             };
         }
         // The cells that pass the checks; the binary tree is built over the other simplices
@@ -649,6 +673,8 @@ impl<const N: usize> Bvh<N> {
             ranges,
             cells: tree.cells,
             cell_links: tree.cell_links,
+            cell_prepared: tree.cell_prepared,
+            exact,
         }
     }
 

@@ -124,6 +124,7 @@ struct Collapse<'a, const N: usize> {
     cells_in: &'a [(Vec<u32>, CellGeometry<N>)],
     cells: Vec<Cell>,
     cell_links: Vec<[u32; N]>,
+    cell_prepared: Vec<PreparedSimplex<N>>,
     nodes: Vec<WideNode<N>>,
     /// The blocks, in order, filled afterwards (in parallel).
     blocks: Vec<Pending>,
@@ -187,6 +188,7 @@ impl<const N: usize> Collapse<'_, N> {
             trusted: geometry.trusted,
         });
         self.cell_links.extend_from_slice(&geometry.neighbours);
+        self.cell_prepared.extend_from_slice(&geometry.prepared);
         LEAF_TAG | CELL_TAG | (self.cells.len() - 1) as u32
     }
 
@@ -222,7 +224,7 @@ pub(super) fn id_ranges<const N: usize>(
     cells: &[Cell],
 ) -> Vec<[[u32; NODE_WIDTH]; 2]> {
     let block_range = |b: &LeafBlock<N>| {
-        let ids = &b.ids[..b.count as usize];
+        let ids = &b.ids[..b.count()];
         (
             ids.iter().copied().min().unwrap(),
             ids.iter().copied().max().unwrap(),
@@ -261,6 +263,7 @@ pub(super) struct WideTree<const N: usize> {
     pub(super) blocks: Vec<LeafBlock<N>>,
     pub(super) cells: Vec<Cell>,
     pub(super) cell_links: Vec<[u32; N]>,
+    pub(super) cell_prepared: Vec<PreparedSimplex<N>>,
 }
 
 /// The wide tree over the binary tree `bin` with leaf order `order` (input indices, and
@@ -284,6 +287,7 @@ pub(super) fn wide_tree<const N: usize>(
         cells_in: cells,
         cells: Vec::with_capacity(cells.len()),
         cell_links: Vec::new(),
+        cell_prepared: Vec::new(),
         nodes: Vec::new(),
         blocks: Vec::with_capacity(bin.iter().filter(|b| b.count > 0).count()),
     };
@@ -304,6 +308,7 @@ pub(super) fn wide_tree<const N: usize>(
         blocks: pending,
         cells: made,
         cell_links,
+        cell_prepared,
         plan,
         ..
     } = c;
@@ -316,11 +321,9 @@ pub(super) fn wide_tree<const N: usize>(
             let mut block = LeafBlock::EMPTY;
             match p {
                 Pending::Order { first, count } => {
-                    block.count = count;
                     for l in 0..count as usize {
                         let i = order[first as usize + l] as usize;
-                        block.ids[l] = ids[i];
-                        block.set_lane(l, &prepare(i));
+                        block.set_lane(l, &prepare(i), ids[i]);
                     }
                 }
                 Pending::Cell { cell, chunk } => {
@@ -328,9 +331,7 @@ pub(super) fn wide_tree<const N: usize>(
                     let at = chunk as usize * BLOCK_WIDTH..;
                     let (members, prepared) = (&members[at.clone()], &geometry.prepared[at]);
                     for (l, (&i, p)) in members.iter().zip(prepared).take(BLOCK_WIDTH).enumerate() {
-                        block.ids[l] = ids[i as usize];
-                        block.set_lane(l, p);
-                        block.count += 1;
+                        block.set_lane(l, p, ids[i as usize]);
                     }
                 }
             }
@@ -342,5 +343,6 @@ pub(super) fn wide_tree<const N: usize>(
         blocks,
         cells: made,
         cell_links,
+        cell_prepared,
     }
 }

@@ -365,7 +365,7 @@ impl<const N: usize> Instances<N> {
     }
 
     /// The world unit normal (eq. 6) of the simplex with global id `g` (zero for a degenerate
-    /// one), bit for bit the normal of its hits.
+    /// one; its tree stores it rounded to f32), bit for bit the normal of its hits.
     #[inline]
     pub fn flat_normal(&self, g: u32) -> Vector<N> {
         let slot = self.slots[g as usize];

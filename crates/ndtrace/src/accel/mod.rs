@@ -23,6 +23,18 @@
 //! A ray is parallel to the hyperplane (and misses) when `|n̂·d| ≤ DEGENERACY_TOLERANCE·|d|`, the
 //! rule of [`crate::geometry::ray_hyperplane`]. Hits are two-sided: orientation is left to shading.
 //!
+//! ## 1b. Rows in f32, decided exactly (`simplex.rs`, `hit_rounded`)
+//! The tree stores the rows `n̂, r_k` rounded to f32 (x_0 stays exact): 100 bytes per simplex
+//! in 4D instead of 164. The test then runs on the rounded rows, in f64, beside a certified
+//! bound on what the rounding changes (each coefficient moves by at most 2⁻²⁴ of itself). Where
+//! the bound shows the exact test finds the ray inside and not parallel, the rounded rows
+//! decide, with their t and coordinates (the hit point on the rounded hyperplane, within 2⁻²⁴
+//! of |X − x_0| of the exact one, [`PLANE_ROUNDING`]); where it shows the exact test misses, a
+//! miss; in between (a ray within ~10⁻⁶ of the simplex's boundary or of parallel: fewer than
+//! one camera ray in 10⁴ over a fine sphere) the lane is *unsure*, and the exact test of the
+//! simplex, prepared again from the scene's vertices ([`ExactSource`]), decides. So every decision at a shared ridge is the
+//! exact test's, and closed meshes stay watertight with the same `BARY_SLACK`.
+//!
 //! ## 2. Build: binned SAH (`build.rs`)
 //! [`Bvh::build`] first builds a binary tree of N-D axis-aligned boxes (each simplex's box padded
 //! to hold its `BARY_SLACK` band) with the surface area heuristic, whose weight in N dimensions is
@@ -40,8 +52,8 @@
 //! The binary tree is collapsed into an 8-wide tree by the optimal collapse of Ylitie, Karras and
 //! Laine (a dynamic program that minimises the summed boundary measure of the wide nodes). The
 //! boxes of a node's up to 8 children are stored in `f32`, rounded outward (so conservative);
-//! every leaf is one *block* of up to 4 prepared simplices with their ids (`tree.rs`), or a flat
-//! cell (3b).
+//! every leaf is one *block* of up to 4 prepared simplices (rows in f32, 1b) with their ids
+//! (`tree.rs`), or a flat cell (3b).
 //!
 //! ## 3b. Flat cells (`cell.rs`)
 //! The simplices that tile one flat convex (N−1)-cell (a facet of the N-cube: (N−1)! Kuhn
@@ -80,11 +92,12 @@
 //!   travels with.
 //! * Structure-of-arrays layout (`tree.rs`): a node's child boxes are slab-tested together, a
 //!   block's simplices (`[f64; 4]` per coefficient, one lane per simplex) intersected together.
-//! * SIMD kernels (`kernels/`): the slab and block tests in SSE2, or AVX2 when the CPU has it
-//!   (`kernels/x86_64.rs`), beside their portable versions (`kernels/portable.rs`), which every
-//!   target compiles. Every kernel performs, per lane, exactly the operations of its portable
-//!   twin and of [`PreparedSimplex::intersect`] in the same order (no FMA), so all paths give
-//!   bit-identical results; the tests compare them bit for bit.
+//! * SIMD kernels (`kernels/`): the slab tests in SSE2, or AVX2 when the CPU has it, and the
+//!   block test in AVX2 (`kernels/x86_64.rs`), beside their portable versions
+//!   (`kernels/portable.rs`), which every target compiles (and which test blocks on CPUs without
+//!   AVX2). Every kernel performs, per lane, exactly the operations of its portable twin and of
+//!   `PreparedSimplex::hit_rounded` in the same order (no FMA), so all paths give bit-identical
+//!   results; the tests compare them bit for bit.
 //! * Prefetches of the leaf blocks a packet will test soon (`kernels/mod.rs`).
 
 // 1. The ray–simplex test.
@@ -117,7 +130,7 @@ pub use cell::FlatCell;
 pub use instance::{Instances, ToObject};
 pub use morton::MORTON_MIN;
 pub use packet::PACKET;
-pub use simplex::{simplex_bounds, Bounds, PreparedSimplex, BARY_SLACK};
+pub use simplex::{simplex_bounds, Bounds, PreparedSimplex, BARY_SLACK, PLANE_ROUNDING};
 #[cfg(feature = "traversal-stats")]
 pub use stats::traversal_stats;
-pub use tree::{Bvh, MAX_LEAF};
+pub use tree::{Bvh, ExactSource, MAX_LEAF};

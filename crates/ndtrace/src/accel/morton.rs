@@ -26,7 +26,7 @@
 use super::build::BOX_PAD;
 use super::simplex::{simplex_bounds, Bounds, PreparedSimplex};
 use super::tree::{
-    f32_down, f32_up, Bvh, LeafBlock, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
+    f32_down, f32_up, Bvh, ExactSource, LeafBlock, WideNode, BLOCK_WIDTH, LEAF_TAG, NODE_WIDTH,
 };
 use crate::linalg::Vector;
 use rayon::prelude::*;
@@ -236,14 +236,19 @@ impl<const N: usize> Bvh<N> {
     pub fn build_morton(
         count: usize,
         domain: Bounds<N>,
-        simplex: impl Fn(usize) -> [[f64; N]; N] + Sync,
+        simplex: impl Fn(usize) -> [[f64; N]; N] + Send + Sync + 'static,
     ) -> Self {
-        Self::build_morton_with_ids(count, domain, simplex, |i| i as u32)
+        let simplex = std::sync::Arc::new(simplex);
+        let at = simplex.clone();
+        let exact = ExactSource::new(move |id| {
+            PreparedSimplex::new(&at(id as usize)).expect("a simplex prepared once prepares again")
+        });
+        Self::build_morton_with_ids(count, domain, |i| simplex(i), |i| i as u32, exact)
     }
 
     /// [`Bvh::build_morton`] with simplex i given the id `id_of(i)` (increasing in i: the
     /// tree's id ranges keep their order), so that a tree may hold some of a scene's simplices
-    /// under their global ids.
+    /// under their global ids; `exact` gives the exact simplex of an id (see [`ExactSource`]).
     ///
     /// # Panics
     /// If `count` is 2³¹ or more.
@@ -252,6 +257,7 @@ impl<const N: usize> Bvh<N> {
         domain: Bounds<N>,
         simplex: impl Fn(usize) -> [[f64; N]; N] + Sync,
         id_of: impl Fn(usize) -> u32 + Sync,
+        exact: ExactSource<N>,
     ) -> Self {
         assert!(
             count < LEAF_TAG as usize,
@@ -265,6 +271,8 @@ impl<const N: usize> Bvh<N> {
             ranges: Vec::new(),
             cells: Vec::new(),
             cell_links: Vec::new(),
+            cell_prepared: Vec::new(),
+            exact: exact.clone(),
         };
         if count == 0 {
             return empty;
@@ -382,34 +390,21 @@ impl<const N: usize> Bvh<N> {
         let blocks: Vec<LeafBlock<N>> = order
             .par_chunks(BLOCK_WIDTH)
             .map(|run| {
-                let mut block = LeafBlock {
-                    m: [[[0.0; BLOCK_WIDTH]; N]; N],
-                    x0: [[0.0; BLOCK_WIDTH]; N],
-                    ids: [EMPTY_SLOT; BLOCK_WIDTH],
-                    count: 0,
-                };
+                let mut block = LeafBlock::EMPTY;
+                let mut l = 0;
                 for &key in run {
                     let id = (key & id_mask) as u32;
                     let Some(p) = PreparedSimplex::new(&simplex(id as usize)) else {
                         continue;
                     };
-                    let l = block.count as usize;
-                    for k in 0..N {
-                        for i in 0..N {
-                            block.m[k][i][l] = p.m[k][i];
-                        }
-                    }
-                    for i in 0..N {
-                        block.x0[i][l] = p.x0[i];
-                    }
-                    block.ids[l] = id_of(id as usize);
-                    block.count += 1;
+                    block.set_lane(l, &p, id_of(id as usize));
+                    l += 1;
                 }
                 block
             })
             .collect();
         drop(order);
-        let len: usize = blocks.par_iter().map(|b| b.count as usize).sum();
+        let len: usize = blocks.par_iter().map(|b| b.count()).sum();
         if len == 0 {
             return empty;
         }
@@ -422,6 +417,8 @@ impl<const N: usize> Bvh<N> {
             ranges,
             cells: Vec::new(),
             cell_links: Vec::new(),
+            cell_prepared: Vec::new(),
+            exact,
         }
     }
 }

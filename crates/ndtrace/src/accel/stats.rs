@@ -4,18 +4,18 @@
 #[cfg(test)]
 thread_local! {
     /// This thread's counts, as in `VISITS`.
-    pub static LOCAL: std::cell::Cell<[u64; 3]> = const { std::cell::Cell::new([0; 3]) };
+    pub static LOCAL: std::cell::Cell<[u64; 4]> = const { std::cell::Cell::new([0; 4]) };
 }
 
 #[cfg(feature = "traversal-stats")]
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Inner nodes visited (once per packet), leaf blocks tested (per ray), node slab tests
-/// (per ray).
+/// (per ray), exact tests of unsure lanes.
 #[cfg(feature = "traversal-stats")]
-pub static VISITS: [AtomicU64; 3] = [AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0)];
+pub static VISITS: [AtomicU64; 4] = [const { AtomicU64::new(0) }; 4];
 
-/// Counts one visit of kind `k` (0: node, 1: leaf, 2: node slab test).
+/// Counts one visit of kind `k` (0: node, 1: leaf, 2: node slab test, 3: exact test).
 #[inline(always)]
 pub fn count(_k: usize) {
     #[cfg(feature = "traversal-stats")]
@@ -28,9 +28,10 @@ pub fn count(_k: usize) {
     });
 }
 
-/// Inner nodes and leaf blocks visited by all traversals so far (feature `traversal-stats`).
+/// Inner nodes, leaf blocks, slab tests and exact tests of all traversals so far (feature
+/// `traversal-stats`).
 #[cfg(feature = "traversal-stats")]
-pub fn traversal_stats() -> [u64; 3] {
+pub fn traversal_stats() -> [u64; 4] {
     use std::sync::atomic::Ordering;
     VISITS.each_ref().map(|v| v.load(Ordering::Relaxed))
 }

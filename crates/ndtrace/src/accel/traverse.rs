@@ -219,22 +219,29 @@ impl<const N: usize> Bvh<N> {
         }
     }
 
-    /// [`Cell::pick`] over the cell's simplices as this tree's blocks hold them.
+    /// [`Cell::pick`] over the cell's simplices, exact (as the module docs of `cell.rs` need).
     #[inline]
     pub(super) fn cell_pick(&self, cell: &Cell, ray: &PreparedRay<N>) -> Pick {
-        let at = |s: u32| {
-            let slot = cell.first_block as usize * BLOCK_WIDTH + s as usize;
-            (&self.blocks[slot / BLOCK_WIDTH], slot % BLOCK_WIDTH)
-        };
-        let (b, l) = at(cell.start);
-        let plane = (
-            std::array::from_fn(|i| b.m[0][i][l]),
-            std::array::from_fn(|i| b.x0[i][l]),
-        );
+        let prepared = &self.cell_prepared[cell.links as usize..][..cell.count as usize];
+        let start = &prepared[cell.start as usize];
+        let plane = (start.normal(), start.origin());
         cell.pick(&self.cell_links, ray, plane, |s, x| {
-            let (b, l) = at(s);
-            b.bary_at(l, x)
+            prepared[s as usize].barycentric(x)
         })
+    }
+
+    /// The exact test of simplex `id`, for a lane its block's rounded rows leave unsure.
+    #[cold]
+    #[inline(never)]
+    fn exact_hit(
+        &self,
+        id: u32,
+        ray: &PreparedRay<N>,
+        tmin: f64,
+        tmax: f64,
+    ) -> Option<(f64, [f64; N])> {
+        stats::count(3);
+        (self.exact.0)(id).hit(ray, tmin, tmax)
     }
 
     /// The address of a leaf's block for prefetching: no bounds check (a prefetch never
@@ -467,19 +474,27 @@ impl<const N: usize> Bvh<N> {
                     let mut test = |b: u32| {
                         let block = &self.blocks[b as usize];
                         let hits = self.block_hit::<AVX>(block, ray, tmin, tmax_b[q]);
-                        let mut mask = hits.mask;
+                        let mut mask = hits.mask | hits.unsure;
                         let best = &mut best[q];
                         while mask != 0 {
                             let l = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
-                            let (t, id) = (hits.t[l], block.ids[l]);
+                            let id = block.ids[l];
+                            let (t, bary) = if hits.unsure & (1 << l) == 0 {
+                                (hits.t[l], None)
+                            } else {
+                                match self.exact_hit(id, ray, tmin, tmax_b[q]) {
+                                    Some((t, b)) => (t, Some(b)),
+                                    None => continue,
+                                }
+                            };
                             if (!best.found || t < best.t || (t == best.t && id < best.id))
                                 && accept(id)
                             {
                                 *best = BestHit {
                                     t,
                                     id,
-                                    bary: hits.bary(l),
+                                    bary: bary.unwrap_or_else(|| hits.bary(l)),
                                     found: true,
                                     block: b,
                                     lane: l as u32,
@@ -512,7 +527,7 @@ impl<const N: usize> Bvh<N> {
                     t: b.t,
                     prim: b.id,
                     bary: b.bary,
-                    normal: std::array::from_fn(|i| m[i][b.lane as usize]),
+                    normal: std::array::from_fn(|i| f64::from(m[i][b.lane as usize])),
                 }
             });
         }
@@ -574,12 +589,17 @@ impl<const N: usize> Bvh<N> {
                             return;
                         }
                         let block = &self.blocks[b as usize];
-                        let mut mask = self.block_hit::<AVX>(block, ray, tmin, tmax[q]).mask;
+                        let hits = self.block_hit::<AVX>(block, ray, tmin, tmax[q]);
+                        let mut mask = hits.mask | hits.unsure;
                         while mask != 0 {
                             let l = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
                             let id = block.ids[l];
-                            if accept(id) && !skip.contains(&id) {
+                            if accept(id)
+                                && !skip.contains(&id)
+                                && (hits.unsure & (1 << l) == 0
+                                    || self.exact_hit(id, ray, tmin, tmax[q]).is_some())
+                            {
                                 hit = true;
                                 break;
                             }

@@ -1,5 +1,6 @@
 //! The memory layout of the tree: wide nodes of `NODE_WIDTH` child boxes in `f32` (rounded outward),
-//! leaf blocks of `BLOCK_WIDTH` prepared simplices stored structure-of-arrays, the binary nodes of the
+//! leaf blocks of `BLOCK_WIDTH` prepared simplices stored structure-of-arrays (rows in f32), the
+//! source of their exact versions, the binary nodes of the
 //! build, and the box measure both the build and the collapse minimise.
 
 use super::cell::Cell;
@@ -9,7 +10,7 @@ use crate::linalg::Vector;
 /// Leaves hold at most this many simplices: the lanes of a block.
 pub const MAX_LEAF: usize = BLOCK_WIDTH;
 /// Lanes of a [`LeafBlock`]: the simplices one block test intersects together (one `f64` lane
-/// each, two SSE2 registers or one AVX2 register per coefficient).
+/// each, one AVX2 register per coefficient).
 pub(super) const BLOCK_WIDTH: usize = 4;
 /// Child slots of a [`WideNode`]: the boxes one slab test meets together (one `f32` lane each,
 /// one AVX2 register per plane); also the width of a packet's ray masks.
@@ -65,20 +66,20 @@ impl<const N: usize> WideNode<N> {
     };
 }
 
-/// A leaf: up to [`BLOCK_WIDTH`] prepared simplices, structure-of-arrays (lane = simplex). `x0` and `n̂`, all
-/// that a test reads before its early exit, come first and lie together.
+/// A leaf: up to [`BLOCK_WIDTH`] prepared simplices, structure-of-arrays (lane = simplex), with
+/// the rows `n̂, r_1 … r_{N−1}` rounded to f32 (see `simplex.rs`, "Rounded rows") and `x_0`
+/// exact. `x0` and `n̂`, all that a test reads before its early exit, come first and lie
+/// together. 100 bytes per lane in 4D (160 + 4 in f64).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
 pub(super) struct LeafBlock<const N: usize> {
     /// `x0[i][lane]`.
     pub(super) x0: [[f64; BLOCK_WIDTH]; N],
-    /// `m[0][i][lane]` = n̂_i, `m[k][i][lane]` = (r_k)_i; zero in unused lanes (which then miss as
-    /// parallel rays).
-    pub(super) m: [[[f64; BLOCK_WIDTH]; N]; N],
-    /// The caller's ids.
+    /// `m[0][i][lane]` = n̂_i, `m[k][i][lane]` = (r_k)_i rounded to the nearest f32; zero in
+    /// unused lanes (which then miss as parallel rays).
+    pub(super) m: [[[f32; BLOCK_WIDTH]; N]; N],
+    /// The caller's ids; `EMPTY_SLOT` in unused lanes (the used ones come first).
     pub(super) ids: [u32; BLOCK_WIDTH],
-    /// Lanes in use.
-    pub(super) count: u32,
 }
 
 /// Largest f32 ≤ x.
@@ -109,6 +110,8 @@ pub(super) fn f32_up(x: f64) -> f32 {
 /// `u[k][lane] = (n̂·d)·t_k` (k ≥ 1), meaningful for the lanes hit.
 pub(super) struct BlockHits<const N: usize> {
     pub(super) mask: u32,
+    /// The lanes the rounded rows cannot decide: their exact test decides (see `simplex.rs`).
+    pub(super) unsure: u32,
     pub(super) t: [f64; BLOCK_WIDTH],
     pub(super) den: [f64; BLOCK_WIDTH],
     pub(super) u: [[f64; BLOCK_WIDTH]; N],
@@ -128,44 +131,81 @@ impl<const N: usize> LeafBlock<N> {
         m: [[[0.0; BLOCK_WIDTH]; N]; N],
         x0: [[0.0; BLOCK_WIDTH]; N],
         ids: [EMPTY_SLOT; BLOCK_WIDTH],
-        count: 0,
     };
 
-    /// Stores the prepared simplex `p` in lane `l`.
+    /// Stores the prepared simplex `p` with id `id` in lane `l` (its rows rounded to f32).
     #[inline]
-    pub(super) fn set_lane(&mut self, l: usize, p: &super::PreparedSimplex<N>) {
+    pub(super) fn set_lane(&mut self, l: usize, p: &super::PreparedSimplex<N>, id: u32) {
         for k in 0..N {
             for i in 0..N {
-                self.m[k][i][l] = p.m[k][i];
+                self.m[k][i][l] = p.m[k][i] as f32;
             }
         }
         for i in 0..N {
             self.x0[i][l] = p.x0[i];
         }
+        self.ids[l] = id;
     }
 
-    /// The barycentric coordinates, with respect to lane `l`, of the orthogonal projection of
-    /// `x` onto its hyperplane ([`PreparedSimplex::barycentric`](super::PreparedSimplex::barycentric) read from the block).
+    /// Lanes in use (the first ones).
     #[inline(always)]
-    pub(super) fn bary_at(&self, l: usize, x: &Vector<N>) -> [f64; N] {
-        let q: Vector<N> = std::array::from_fn(|i| x[i] - self.x0[i][l]);
-        let mut b = [0.0; N];
-        let mut sum = 0.0;
-        for k in 1..N {
-            let mut s = 0.0;
-            for i in 0..N {
-                s += self.m[k][i][l] * q[i];
-            }
-            b[k] = s;
-            sum += s;
+    pub(super) fn count(&self) -> usize {
+        self.ids.iter().take_while(|&&id| id != EMPTY_SLOT).count()
+    }
+
+    /// The bit set of the lanes in use.
+    #[inline(always)]
+    pub(super) fn used(&self) -> u32 {
+        let mut m = 0;
+        for (l, &id) in self.ids.iter().enumerate() {
+            m |= u32::from(id != EMPTY_SLOT) << l;
         }
-        b[0] = 1.0 - sum;
-        b
+        m
     }
 
     /// Bytes of `x0` and `m[0]` (n̂), which lead the block: all that a test reads before its
     /// early exit.
-    pub(super) const HEAD: usize = 2 * N * BLOCK_WIDTH * size_of::<f64>();
+    pub(super) const HEAD: usize = N * BLOCK_WIDTH * (size_of::<f64>() + size_of::<f32>());
+}
+
+/// Where a tree finds the exact prepared simplex of an id, for the rare lanes its rounded rows
+/// leave unsure (see the module docs of [`crate::accel`], 1b): the scene's meshes, or the
+/// simplices given to the build.
+/// Not part of a tree's identity: two trees compare equal whatever their sources.
+#[derive(Clone)]
+pub struct ExactSource<const N: usize>(
+    pub(super) std::sync::Arc<dyn Fn(u32) -> super::PreparedSimplex<N> + Send + Sync>,
+);
+
+impl<const N: usize> ExactSource<N> {
+    /// The source that prepares simplex `id` with `prepare` (which must give the simplex the
+    /// tree was built with).
+    pub fn new(prepare: impl Fn(u32) -> super::PreparedSimplex<N> + Send + Sync + 'static) -> Self {
+        ExactSource(std::sync::Arc::new(prepare))
+    }
+
+    /// The exact prepared simplex `id`.
+    #[inline]
+    pub fn prepare(&self, id: u32) -> super::PreparedSimplex<N> {
+        (self.0)(id)
+    }
+
+    /// A source with no simplices: for an empty tree, or until [`Bvh::set_exact`].
+    pub(crate) fn none() -> Self {
+        Self::new(|id| panic!("no exact source for simplex {id}"))
+    }
+}
+
+impl<const N: usize> PartialEq for ExactSource<N> {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl<const N: usize> std::fmt::Debug for ExactSource<N> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("ExactSource")
+    }
 }
 
 /// A bounding-volume hierarchy over prepared simplices (see the module docs).
@@ -187,6 +227,10 @@ pub struct Bvh<const N: usize> {
     pub(super) cells: Vec<Cell>,
     /// The cells' neighbour links, `count` per cell from its `links`.
     pub(super) cell_links: Vec<[u32; N]>,
+    /// The cells' simplices, exact, as `cell_links` (the walks locate hit points with them).
+    pub(super) cell_prepared: Vec<super::PreparedSimplex<N>>,
+    /// The exact simplices of the unsure lanes.
+    pub(super) exact: ExactSource<N>,
 }
 
 /// A binary node of the build: f32 bounds rounded outward and either two children (the left
@@ -219,6 +263,12 @@ pub(super) fn half_area<const N: usize>(min: &Vector<N>, max: &Vector<N>) -> f64
 }
 
 impl<const N: usize> Bvh<N> {
+    /// Gives the tree the source of its exact simplices (a build without one: see
+    /// [`Bvh::build_with_cells_borrowing`]); it must give the simplices the tree was built with.
+    pub(crate) fn set_exact(&mut self, exact: ExactSource<N>) {
+        self.exact = exact;
+    }
+
     /// Number of simplices.
     pub fn len(&self) -> usize {
         self.len
@@ -245,7 +295,8 @@ impl<const N: usize> Bvh<N> {
             * (std::mem::size_of::<WideNode<N>>() + std::mem::size_of::<[[u32; NODE_WIDTH]; 2]>())
             + self.blocks.len() * std::mem::size_of::<LeafBlock<N>>()
             + self.cells.len() * std::mem::size_of::<Cell>()
-            + self.cell_links.len() * std::mem::size_of::<[u32; N]>()
+            + self.cell_links.len()
+                * (std::mem::size_of::<[u32; N]>() + size_of::<super::PreparedSimplex<N>>())
     }
 
     /// Number of flat cells (each holding the simplices of one flat facet, see `cell.rs`).
@@ -265,18 +316,19 @@ impl<const N: usize> Bvh<N> {
     /// leaving the others: the slots of a scene's trees, which hold disjoint ids, in one list.
     pub fn fill_id_slots(&self, slots: &mut [u32]) {
         for (b, block) in self.blocks.iter().enumerate() {
-            for (l, &id) in block.ids[..block.count as usize].iter().enumerate() {
+            for (l, &id) in block.ids[..block.count()].iter().enumerate() {
                 slots[id as usize] = (b * BLOCK_WIDTH + l) as u32;
             }
         }
     }
 
-    /// The unit normal n̂ of the prepared simplex in `slot` (see [`Bvh::id_slots`]), bit for bit
-    /// [`PreparedSimplex::normal`](super::PreparedSimplex::normal).
+    /// The unit normal n̂ of the prepared simplex in `slot` (see [`Bvh::id_slots`]) as the tree
+    /// stores it: [`PreparedSimplex::normal`](super::PreparedSimplex::normal) rounded to f32, the
+    /// normal of its hits.
     #[inline]
     pub fn slot_normal(&self, slot: u32) -> Vector<N> {
         let (b, l) = (slot as usize / BLOCK_WIDTH, slot as usize % BLOCK_WIDTH);
-        std::array::from_fn(|i| self.blocks[b].m[0][i][l])
+        std::array::from_fn(|i| f64::from(self.blocks[b].m[0][i][l]))
     }
 
     /// Depth of the 8-wide tree counting the leaf level (0 when empty).

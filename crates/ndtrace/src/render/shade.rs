@@ -7,7 +7,7 @@
 //! of every sum, so that each of its rays gets [`shade_hit`]'s bits (tested cell by cell).
 
 use super::sampling::SplitMix;
-use crate::accel::BOX_PAD;
+use crate::accel::{BOX_PAD, PLANE_ROUNDING};
 use crate::linalg::{add, add_scaled, dot, norm, scale, sub, Vector};
 use crate::ray::{Hit, Ray};
 use crate::scene::build::Rgb;
@@ -15,12 +15,15 @@ use crate::scene::{Light, Scene};
 
 /// Shadow rays start this fraction of the scene's diagonal off the surface, toward the light.
 /// The inside test widens every simplex, within its hyperplane, by its `BARY_SLACK` band: at
-/// most `BOX_PAD` of the simplex's extent, so of the scene's, beyond its boundary. A hit in
-/// that band just past a convex ridge, moved off by ten times the band or more (checked at
-/// compile time), lies on the outer side of the neighbouring simplex too, for folds up to
-/// atan(10) ≈ 84° between the two hyperplanes; so the shadow ray does not start behind it.
-pub const SHADOW_OFFSET: f64 = 1e-7;
-const _: () = assert!(SHADOW_OFFSET >= 10.0 * BOX_PAD);
+/// most `BOX_PAD` of the simplex's extent, so of the scene's, beyond its boundary; and a hit
+/// point lies on the hyperplane of the simplex's rows as the tree stores them (rounded to
+/// f32), within `PLANE_ROUNDING` of the simplex's extent of its exact hyperplane. A hit in
+/// that band just past a convex ridge, moved off by ten times the band or more beyond that
+/// rounding (checked at compile time), lies on the outer side of the neighbouring simplex too,
+/// for folds up to atan(10) ≈ 84° between the two hyperplanes; so the shadow ray does not
+/// start behind it.
+pub const SHADOW_OFFSET: f64 = 2e-7;
+const _: () = assert!(SHADOW_OFFSET >= 10.0 * BOX_PAD + PLANE_ROUNDING);
 
 /// The colour of the camera ray `ray` at its nearest hit `hit` in `scene` (the `shaded` render
 /// mode): N-D Lambert + Blinn–Phong with ambient light and hard shadows.

@@ -9,7 +9,8 @@ use super::fields::{coefficient, matrix_rows, mesh_from_rows, rgb, vec_n, R};
 use super::mesh_file::{orientation_warning, read_mesh, MeshReader};
 use super::transform::transform;
 use crate::accel::{
-    simplex_bounds, Bounds, Bvh, FlatCell, Instances, PreparedSimplex, ToObject, MORTON_MIN,
+    simplex_bounds, Bounds, Bvh, ExactSource, FlatCell, Instances, PreparedSimplex, ToObject,
+    MORTON_MIN,
 };
 use crate::camera::{look_at_orientation, Camera};
 use crate::linalg::{
@@ -840,13 +841,19 @@ pub(crate) fn build_using<const N: usize>(
         trees.push(tree);
     }
     swap_own(&mut objects, &mut own);
-    drop(own);
     // A certificate found in object space holds in world space (an affine map keeps a body
     // convex); the world normals are turned around with the simplices' order (`ToObject`).
     for (o, m) in objects.iter_mut().zip(&maps) {
         if m.is_some_and(|m| m.flip) {
             o.convex = o.convex.map(|side| !side);
         }
+    }
+    // The trees find their exact simplices in the scene's objects (and the large transformed
+    // ones' vertices in their own space, kept for it).
+    let objects = Arc::new(objects);
+    let own: Vec<Option<Arc<Vec<Vector<N>>>>> = own.into_iter().map(|v| v.map(Arc::new)).collect();
+    for (tree, members) in trees.iter_mut().zip(&groups) {
+        tree.set_exact(exact_source(&objects, &offsets, members, &own));
     }
     let skipped = total as usize - trees.iter().map(Bvh::len).sum::<usize>();
     let extent = extent_of(&objects, &offsets, &slots);
@@ -865,7 +872,7 @@ pub(crate) fn build_using<const N: usize>(
     );
     Ok(Scene {
         camera,
-        objects: Arc::new(objects),
+        objects,
         lights,
         ambient,
         background,
@@ -930,23 +937,24 @@ fn group_tree<const N: usize>(
                 let (k, s) = split(i);
                 offsets[k] + s as u32
             },
+            ExactSource::none(),
         )
     };
     tree.fill_id_slots(slots);
     if shadows {
-        certify_from_tree(objects, descs, offsets, members, &tree, slots);
+        certify_held(objects, descs, offsets, members, slots);
     }
     tree
 }
 
-/// Convexity certificates of the objects `members` from the normals their tree holds
-/// (elevation maps are not certified: see `sah_bvh`); `slots` as [`Bvh::id_slots`] gives them.
-fn certify_from_tree<const N: usize>(
+/// Convexity certificates of the objects `members` of a Morton tree, from the exact normals of
+/// the simplices it holds (`slots` as [`Bvh::id_slots`] gives them; the tree's own normals are
+/// rounded to f32); elevation maps are not certified: see `sah_bvh`.
+fn certify_held<const N: usize>(
     objects: &mut [Object<N>],
     descs: &[ObjectDesc],
     offsets: &[u32],
     members: &[usize],
-    tree: &Bvh<N>,
     slots: &[u32],
 ) {
     for &i in members {
@@ -959,7 +967,9 @@ fn certify_from_tree<const N: usize>(
             .into_par_iter()
             .map(|g| match slots[g] {
                 u32::MAX => [0.0; N],
-                slot => tree.slot_normal(slot),
+                // The exact normal (the tree's is rounded to f32), as `sah_bvh` finds it.
+                _ => crate::geometry::hyperplane(&o.mesh.simplex_points(g - first))
+                    .map_or([0.0; N], |h| h.normal),
             })
             .collect();
         o.convex = crate::convex::convex_side(&o.mesh, &normals, known_convex(d.shape));
@@ -1056,18 +1066,18 @@ impl<const N: usize> Scene<N> {
             .filter(|&k| (1..self.instance_min).contains(&counts[k]))
             .collect();
         let boxes = world_boxes(&objects);
-        let instances = if small
+        let (objects, instances) = if small
             .iter()
             .all(|&k| objects[k].mesh == self.objects[k].mesh)
         {
-            self.instances.moved(maps, &boxes)
+            (Arc::new(objects), self.instances.moved(maps, &boxes))
         } else {
             let mut slots = self.instances.slots().to_vec();
             for &k in &small {
                 slots[self.ids(k).start as usize..self.ids(k).end as usize].fill(u32::MAX);
             }
             let shadows = desc.render.shadows && !lights.is_empty();
-            let tree = group_tree(
+            let mut tree = group_tree(
                 &mut objects,
                 &desc.objects,
                 (&offsets, &mut slots),
@@ -1075,12 +1085,18 @@ impl<const N: usize> Scene<N> {
                 shadows,
                 MORTON_MIN,
             );
+
             // A simplex that became degenerate or the reverse changes the warnings: build.
             if slots.par_iter().filter(|&&s| s == u32::MAX).count() != self.skipped_degenerate {
                 return None;
             }
-            self.instances
-                .moved_with((maps, &boxes), tree, &small, slots)
+            // The moved objects in world space, as this frame's objects hold them.
+            let objects = Arc::new(objects);
+            tree.set_exact(exact_source(&objects, &offsets, &small, &[]));
+            let instances = self
+                .instances
+                .moved_with((maps, &boxes), tree, &small, slots);
+            (objects, instances)
         };
         let extent = extent_of(&objects, &offsets, instances.slots());
         let edge_cache = Arc::new(
@@ -1089,7 +1105,7 @@ impl<const N: usize> Scene<N> {
         );
         Some(Ok(Scene {
             camera,
-            objects: Arc::new(objects),
+            objects,
             lights,
             ambient,
             background,
@@ -1355,6 +1371,31 @@ fn offsets_of<const N: usize>(objects: &[Object<N>]) -> (Vec<u32>, u64) {
 
 /// The points of global simplex g of the objects whose first global ids are `offsets` (what
 /// [`Scene::locate`] does, before there is a scene).
+/// Where the tree over the objects `members` finds the exact simplex of a global id: their
+/// meshes in `objects`, with the vertices of `own[k]` for an object held in its own space.
+fn exact_source<const N: usize>(
+    objects: &Arc<Vec<Object<N>>>,
+    offsets: &[u32],
+    members: &[usize],
+    own: &[Option<Arc<Vec<Vector<N>>>>],
+) -> ExactSource<N> {
+    // (first global id, object, its vertices in its own space when it has them)
+    type Part<const N: usize> = (u32, usize, Option<Arc<Vec<Vector<N>>>>);
+    let parts: Vec<Part<N>> = members
+        .iter()
+        .map(|&k| (offsets[k], k, own.get(k).cloned().flatten()))
+        .collect();
+    let objects = objects.clone();
+    ExactSource::new(move |g| {
+        let (off, k, own) = &parts[parts.partition_point(|p| p.0 <= g) - 1];
+        let mesh = &objects[*k].mesh;
+        let vertices = own.as_deref().unwrap_or(&mesh.vertices);
+        let idx = &mesh.simplices[(g - off) as usize];
+        PreparedSimplex::new(&idx.map(|i| vertices[i as usize]))
+            .expect("a simplex prepared once prepares again")
+    })
+}
+
 fn simplex_at<const N: usize>(objects: &[Object<N>], offsets: &[u32], g: usize) -> [Vector<N>; N] {
     let o = offsets.partition_point(|&off| off as usize <= g) - 1;
     objects[o].mesh.simplex_points(g - offsets[o] as usize)
@@ -1473,7 +1514,7 @@ fn sah_bvh<const N: usize>(
             FlatCell { members, points }
         })
         .collect();
-    Bvh::build_lazily_with_cells(ids, bounds, cells, |g| {
+    Bvh::build_with_cells_borrowing(ids, bounds, cells, |g| {
         PreparedSimplex::new(&simplex_at(objects, offsets, g as usize))
             .expect("a simplex prepared once prepares again")
     })

@@ -1,6 +1,7 @@
 //! The kernels of the traversal: slab tests of a node's child boxes and block tests of a leaf's
 //! simplices, for one ray and for packets, with bit-mask helpers. `x86_64.rs` holds the SIMD
-//! versions (SSE2, and AVX2 chosen at run time), `portable.rs` the portable ones, which every
+//! versions (slab tests in SSE2, slab and block tests in AVX2 chosen at run time), `portable.rs`
+//! the portable ones, which every
 //! target compiles and the tests compare with the SIMD ones bit for bit. The functions here pick
 //! one; `AVX` is only true in code compiled for AVX2 and run after an AVX2 check.
 
@@ -36,11 +37,7 @@ impl<const N: usize> LeafBlock<N> {
     /// Intersects the ray with every lane (see `hit_sse2` on x86_64, and `hit_portable`).
     #[inline(always)]
     pub(in crate::accel) fn hit(&self, ray: &PreparedRay<N>, tmin: f64, tmax: f64) -> BlockHits<N> {
-        #[cfg(target_arch = "x86_64")]
-        let out = self.hit_sse2(ray, tmin, tmax);
-        #[cfg(not(target_arch = "x86_64"))]
-        let out = self.hit_portable(ray, tmin, tmax);
-        out
+        self.hit_portable(ray, tmin, tmax)
     }
 }
 

@@ -2,12 +2,11 @@
 //! kernels of other targets. Compiled on every target.
 
 use super::super::packet::TraversalRay;
-use super::super::simplex::{dot_pairwise, PreparedRay};
+use super::super::simplex::PreparedRay;
 use super::super::tree::{
     BlockHits, LeafBlock, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
 };
 use super::super::PreparedSimplex;
-use crate::linalg::{sub, Vector};
 
 impl<const N: usize> TraversalRay<N> {
     /// Portable version of the x86_64 slab test `slab_sse` (same arithmetic, same results).
@@ -44,7 +43,8 @@ impl<const N: usize> TraversalRay<N> {
 }
 
 impl<const N: usize> LeafBlock<N> {
-    /// Portable version of the x86_64 block test `hit_sse2` (same arithmetic, same results).
+    /// Portable version of the x86_64 block test `hit_sse2` (same arithmetic, same results):
+    /// [`PreparedSimplex::hit_rounded`] lane by lane.
     #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
     #[inline(always)]
     pub(in crate::accel) fn hit_portable(
@@ -55,26 +55,22 @@ impl<const N: usize> LeafBlock<N> {
     ) -> BlockHits<N> {
         let mut out = BlockHits {
             mask: 0,
+            unsure: 0,
             t: [0.0; BLOCK_WIDTH],
             den: [0.0; BLOCK_WIDTH],
             u: [[0.0; BLOCK_WIDTH]; N],
         };
-        for l in 0..self.count as usize {
-            let lane = PreparedSimplex {
-                m: std::array::from_fn(|k| std::array::from_fn(|i| self.m[k][i][l])),
-                x0: std::array::from_fn(|i| self.x0[i][l]),
-            };
-            let n = &lane.m[0];
-            let den = dot_pairwise(n, &ray.d);
-            let p = sub(&lane.x0, &ray.o);
-            let num = dot_pairwise(n, &p);
-            let w: Vector<N> = std::array::from_fn(|i| num * ray.d[i] - den * p[i]);
-            out.t[l] = num / den;
-            out.den[l] = den;
+        for l in 0..self.count() {
+            let m = std::array::from_fn(|k| std::array::from_fn(|i| f64::from(self.m[k][i][l])));
+            let x0 = std::array::from_fn(|i| self.x0[i][l]);
+            let r = PreparedSimplex::hit_rounded(&m, &x0, ray, tmin, tmax);
+            out.t[l] = r.t;
+            out.den[l] = r.den;
             for k in 1..N {
-                out.u[k][l] = dot_pairwise(&lane.m[k], &w);
+                out.u[k][l] = r.u[k];
             }
-            out.mask |= (lane.hit(ray, tmin, tmax).is_some() as u32) << l;
+            out.mask |= u32::from(r.hit) << l;
+            out.unsure |= u32::from(r.unsure) << l;
         }
         out
     }

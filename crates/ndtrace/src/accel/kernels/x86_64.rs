@@ -4,7 +4,7 @@
 //! order, no FMA), which the tests check bit for bit.
 
 use super::super::packet::{Packet, TraversalRay};
-use super::super::simplex::PreparedRay;
+use super::super::simplex::{PreparedRay, F64_ROUNDING, ROUNDING};
 use super::super::stats;
 use super::super::tree::{BlockHits, LeafBlock, WideNode, BLOCK_WIDTH, NODE_WIDTH};
 use crate::accel::BARY_SLACK;
@@ -70,99 +70,10 @@ impl<const N: usize> TraversalRay<N> {
 }
 
 impl<const N: usize> LeafBlock<N> {
-    /// Intersects the ray with every lane: which lanes are hit with t in (tmin, tmax), and
-    /// their data. Per lane, exactly the arithmetic of [`PreparedSimplex::intersect`](crate::accel::PreparedSimplex::intersect) (the same
-    /// operations in the same order, hence the same bits). Returns early, before the inside
-    /// test, when no lane has t in range.
-    #[inline(always)]
-    pub(in crate::accel) fn hit_sse2(
-        &self,
-        ray: &PreparedRay<N>,
-        tmin: f64,
-        tmax: f64,
-    ) -> BlockHits<N> {
-        use std::arch::x86_64::*;
-        const H: usize = BLOCK_WIDTH / 2;
-        /// Pairwise sum in the order of `simplex::sum_pairwise`.
-        #[inline(always)]
-        fn sum2<const N: usize>(mut v: [__m128d; N]) -> __m128d {
-            let mut m = N;
-            while m > 1 {
-                let half = m.div_ceil(2);
-                for j in 0..m / 2 {
-                    // SAFETY: SSE2 is part of the x86_64 baseline.
-                    v[j] = unsafe { _mm_add_pd(v[j], v[j + half]) };
-                }
-                m = half;
-            }
-            v[0]
-        }
-        // SAFETY: SSE2 is part of the x86_64 baseline; every pointer loaded or stored is a
-        // `[f64; 4]` accessed as two halves of 16 valid bytes (unaligned accesses).
-        unsafe {
-            let ld = |a: &[f64; BLOCK_WIDTH], h: usize| _mm_loadu_pd(a.as_ptr().add(2 * h));
-            let zero = _mm_setzero_pd();
-            let d: [__m128d; N] = std::array::from_fn(|i| _mm_set1_pd(ray.d[i]));
-            let mut out = BlockHits {
-                mask: 0,
-                t: [0.0; BLOCK_WIDTH],
-                den: [0.0; BLOCK_WIDTH],
-                u: [[0.0; BLOCK_WIDTH]; N],
-            };
-            let mut den = [zero; H];
-            let mut num = [zero; H];
-            let mut p = [[zero; N]; H];
-            let mut ok = [zero; H];
-            let mut any = 0;
-            let (par2, lo, hi) = (_mm_set1_pd(ray.par2), _mm_set1_pd(tmin), _mm_set1_pd(tmax));
-            for h in 0..H {
-                den[h] = sum2::<N>(std::array::from_fn(|i| {
-                    _mm_mul_pd(ld(&self.m[0][i], h), d[i])
-                }));
-                p[h] =
-                    std::array::from_fn(|i| _mm_sub_pd(ld(&self.x0[i], h), _mm_set1_pd(ray.o[i])));
-                num[h] = sum2::<N>(std::array::from_fn(|i| {
-                    _mm_mul_pd(ld(&self.m[0][i], h), p[h][i])
-                }));
-                let t = _mm_div_pd(num[h], den[h]);
-                let par = _mm_cmpgt_pd(_mm_mul_pd(den[h], den[h]), par2);
-                ok[h] = _mm_and_pd(par, _mm_and_pd(_mm_cmpgt_pd(t, lo), _mm_cmplt_pd(t, hi)));
-                any |= _mm_movemask_pd(ok[h]);
-                _mm_storeu_pd(out.t.as_mut_ptr().add(2 * h), t);
-                _mm_storeu_pd(out.den.as_mut_ptr().add(2 * h), den[h]);
-            }
-            if any == 0 {
-                return out;
-            }
-            let sign = _mm_set1_pd(-0.0);
-            for h in 0..H {
-                let w: [__m128d; N] = std::array::from_fn(|i| {
-                    _mm_sub_pd(_mm_mul_pd(num[h], d[i]), _mm_mul_pd(den[h], p[h][i]))
-                });
-                let abs = _mm_andnot_pd(sign, den[h]);
-                let thr = _mm_mul_pd(_mm_set1_pd(-BARY_SLACK), abs);
-                let flip = _mm_and_pd(sign, den[h]);
-                let mut sum = zero;
-                for k in 1..N {
-                    let u = sum2::<N>(std::array::from_fn(|i| {
-                        _mm_mul_pd(ld(&self.m[k][i], h), w[i])
-                    }));
-                    _mm_storeu_pd(out.u[k].as_mut_ptr().add(2 * h), u);
-                    // u_k·sign(n̂·d), exactly (a sign flip).
-                    let v = _mm_xor_pd(u, flip);
-                    ok[h] = _mm_and_pd(ok[h], _mm_cmpge_pd(v, thr));
-                    sum = _mm_add_pd(sum, v);
-                }
-                ok[h] = _mm_and_pd(ok[h], _mm_cmpge_pd(_mm_sub_pd(abs, sum), thr));
-                out.mask |= (_mm_movemask_pd(ok[h]) as u32) << (2 * h);
-            }
-            out.mask &= (1 << self.count) - 1;
-            out
-        }
-    }
-
-    /// The block test of [`LeafBlock::hit_sse2`] with the 4 lanes in one AVX register: the same
-    /// operations in the same order (no FMA), hence the same bits, and the same early return.
+    /// The block test with the 4 lanes in one AVX register: per lane, exactly the arithmetic
+    /// of [`PreparedSimplex::hit_rounded`](crate::accel::PreparedSimplex) (the same operations
+    /// in the same order, no FMA, hence the same bits) on the rows widened from f32. Returns
+    /// early, before the inside test, when the t test rules out every lane.
     ///
     /// # Safety
     /// The CPU must support AVX2.
@@ -188,54 +99,134 @@ impl<const N: usize> LeafBlock<N> {
             }
             v[0]
         }
-        let ld = |a: &[f64; BLOCK_WIDTH]| _mm256_loadu_pd(a.as_ptr());
-        let d: [__m256d; N] = std::array::from_fn(|i| _mm256_set1_pd(ray.d[i]));
+        // SAFETY (closures): only called here, where AVX2 is guaranteed; the pointers are
+        // `[f32; 4]` and `[f64; 4]` read whole (unaligned loads).
+        let row = |a: &[f32; BLOCK_WIDTH]| _mm256_cvtps_pd(_mm_loadu_ps(a.as_ptr()));
+        let sign = _mm256_set1_pd(-0.0);
+        let abs = |v: __m256d| _mm256_andnot_pd(sign, v);
+        let splat = _mm256_set1_pd;
         let mut out = BlockHits {
             mask: 0,
+            unsure: 0,
             t: [0.0; BLOCK_WIDTH],
             den: [0.0; BLOCK_WIDTH],
             u: [[0.0; BLOCK_WIDTH]; N],
         };
-        let den = sum4::<N>(std::array::from_fn(|i| {
-            _mm256_mul_pd(ld(&self.m[0][i]), d[i])
-        }));
-        let p: [__m256d; N] =
-            std::array::from_fn(|i| _mm256_sub_pd(ld(&self.x0[i]), _mm256_set1_pd(ray.o[i])));
-        let num = sum4::<N>(std::array::from_fn(|i| {
-            _mm256_mul_pd(ld(&self.m[0][i]), p[i])
-        }));
+        let d: [__m256d; N] = std::array::from_fn(|i| splat(ray.d[i]));
+        let n: [__m256d; N] = std::array::from_fn(|i| row(&self.m[0][i]));
+        let den = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(n[i], d[i])));
+        let p: [__m256d; N] = std::array::from_fn(|i| {
+            _mm256_sub_pd(_mm256_loadu_pd(self.x0[i].as_ptr()), splat(ray.o[i]))
+        });
+        let num = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(n[i], p[i])));
         let t = _mm256_div_pd(num, den);
-        let par = _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_mul_pd(den, den), _mm256_set1_pd(ray.par2));
-        let above = _mm256_cmp_pd::<_CMP_GT_OQ>(t, _mm256_set1_pd(tmin));
-        let below = _mm256_cmp_pd::<_CMP_LT_OQ>(t, _mm256_set1_pd(tmax));
-        let mut ok = _mm256_and_pd(par, _mm256_and_pd(above, below));
+        let ad = abs(den);
+        let e_den = splat(ray.e_den);
+        let p_1 = sum4::<N>(std::array::from_fn(|i| abs(p[i])));
+        let e_num = _mm256_mul_pd(splat(ROUNDING), p_1);
+        let lo = _mm256_sub_pd(ad, e_den);
+        let hi = _mm256_add_pd(ad, e_den);
+        let sure_sign = _mm256_cmp_pd::<_CMP_GT_OQ>(lo, _mm256_setzero_pd());
+        let g = _mm256_mul_pd(
+            splat(2.0),
+            _mm256_add_pd(e_num, _mm256_mul_pd(abs(t), e_den)),
+        );
+        let (tmin, tmax, par2) = (splat(tmin), splat(tmax), splat(ray.par2));
+        let far = _mm256_and_pd(
+            sure_sign,
+            _mm256_or_pd(
+                _mm256_cmp_pd::<_CMP_GE_OQ>(_mm256_mul_pd(_mm256_sub_pd(tmin, t), lo), g),
+                _mm256_cmp_pd::<_CMP_GE_OQ>(_mm256_mul_pd(_mm256_sub_pd(t, tmax), lo), g),
+            ),
+        );
+        let parallel = _mm256_cmp_pd::<_CMP_NGT_UQ>(_mm256_mul_pd(hi, hi), par2);
+        let crossing = _mm256_and_pd(
+            sure_sign,
+            _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_mul_pd(lo, lo), par2),
+        );
         _mm256_storeu_pd(out.t.as_mut_ptr(), t);
         _mm256_storeu_pd(out.den.as_mut_ptr(), den);
-        if _mm256_movemask_pd(ok) == 0 {
+        let used = self.used();
+        if _mm256_movemask_pd(_mm256_or_pd(parallel, far)) as u32 & used == used {
             return out;
         }
-        let sign = _mm256_set1_pd(-0.0);
         let w: [__m256d; N] = std::array::from_fn(|i| {
             _mm256_sub_pd(_mm256_mul_pd(num, d[i]), _mm256_mul_pd(den, p[i]))
         });
-        let abs = _mm256_andnot_pd(sign, den);
-        let thr = _mm256_mul_pd(_mm256_set1_pd(-BARY_SLACK), abs);
-        let flip = _mm256_and_pd(sign, den);
-        let mut sum = _mm256_setzero_pd();
-        for k in 1..N {
-            let u = sum4::<N>(std::array::from_fn(|i| {
-                _mm256_mul_pd(ld(&self.m[k][i]), w[i])
-            }));
-            _mm256_storeu_pd(out.u[k].as_mut_ptr(), u);
-            let v = _mm256_xor_pd(u, flip);
-            ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GE_OQ>(v, thr));
-            sum = _mm256_add_pd(sum, v);
-        }
-        ok = _mm256_and_pd(
-            ok,
-            _mm256_cmp_pd::<_CMP_GE_OQ>(_mm256_sub_pd(abs, sum), thr),
+        let w_1 = sum4::<N>(std::array::from_fn(|i| abs(w[i])));
+        let c = _mm256_add_pd(
+            _mm256_mul_pd(
+                w_1,
+                _mm256_add_pd(
+                    _mm256_add_pd(_mm256_mul_pd(splat(ROUNDING), lo), e_den),
+                    splat(ray.rd_max),
+                ),
+            ),
+            _mm256_mul_pd(
+                _mm256_mul_pd(
+                    splat(F64_ROUNDING),
+                    _mm256_add_pd(
+                        _mm256_mul_pd(abs(num), splat(ray.d_max)),
+                        _mm256_mul_pd(ad, p_1),
+                    ),
+                ),
+                lo,
+            ),
         );
-        out.mask = _mm256_movemask_pd(ok) as u32 & ((1 << self.count) - 1);
+        let thr_in = _mm256_mul_pd(_mm256_mul_pd(splat(-BARY_SLACK), lo), lo);
+        let thr_out = _mm256_mul_pd(_mm256_mul_pd(splat(-BARY_SLACK), hi), lo);
+        let flip = _mm256_and_pd(sign, den);
+        let mut inside = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+        let mut outside = _mm256_setzero_pd();
+        let (mut sum, mut r_sum) = (_mm256_setzero_pd(), _mm256_setzero_pd());
+        for k in 1..N {
+            let r: [__m256d; N] = std::array::from_fn(|i| row(&self.m[k][i]));
+            let u = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(r[i], w[i])));
+            _mm256_storeu_pd(out.u[k].as_mut_ptr(), u);
+            // u_k·sign(n̂·d), exactly (a sign flip).
+            let v = _mm256_xor_pd(u, flip);
+            let r_1 = sum4::<N>(std::array::from_fn(|i| abs(r[i])));
+            let (vl, el) = (_mm256_mul_pd(v, lo), _mm256_mul_pd(r_1, c));
+            inside = _mm256_and_pd(
+                inside,
+                _mm256_cmp_pd::<_CMP_GE_OQ>(_mm256_sub_pd(vl, el), thr_in),
+            );
+            outside = _mm256_or_pd(
+                outside,
+                _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_add_pd(vl, el), thr_out),
+            );
+            sum = _mm256_add_pd(sum, v);
+            r_sum = _mm256_add_pd(r_sum, r_1);
+        }
+        let v0 = _mm256_mul_pd(_mm256_sub_pd(ad, sum), lo);
+        let e0 = _mm256_add_pd(_mm256_mul_pd(r_sum, c), _mm256_mul_pd(e_den, lo));
+        inside = _mm256_and_pd(
+            inside,
+            _mm256_cmp_pd::<_CMP_GE_OQ>(_mm256_sub_pd(v0, e0), thr_in),
+        );
+        outside = _mm256_or_pd(
+            outside,
+            _mm256_cmp_pd::<_CMP_LT_OQ>(_mm256_add_pd(v0, e0), thr_out),
+        );
+        let decided = _mm256_and_pd(crossing, inside);
+        let in_range = _mm256_and_pd(
+            _mm256_cmp_pd::<_CMP_GT_OQ>(t, tmin),
+            _mm256_cmp_pd::<_CMP_LT_OQ>(t, tmax),
+        );
+        let hit = _mm256_and_pd(decided, in_range);
+        let miss = _mm256_or_pd(
+            _mm256_or_pd(parallel, far),
+            _mm256_or_pd(
+                _mm256_and_pd(sure_sign, outside),
+                _mm256_andnot_pd(in_range, decided),
+            ),
+        );
+        let (hit, miss) = (
+            _mm256_movemask_pd(hit) as u32,
+            _mm256_movemask_pd(miss) as u32,
+        );
+        out.mask = hit & used;
+        out.unsure = !(hit | miss) & used;
         out
     }
 }

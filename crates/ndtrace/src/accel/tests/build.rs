@@ -37,7 +37,8 @@ fn accel_a_lazily_prepared_build_is_the_build_over_prepared_simplices() {
             .collect();
         let ids: Vec<u32> = kept.iter().map(|(_, id)| *id).collect();
         let bounds = kept.iter().map(|(p, _)| simplex_bounds(p)).collect();
-        let lazy = Bvh::build_lazily(ids, bounds, |id| {
+        let s = s.clone();
+        let lazy = Bvh::build_lazily(ids, bounds, move |id| {
             PreparedSimplex::new(&s[(id as usize - 3) / 5].0).unwrap()
         });
         assert!(lazy == want, "N={N}: the lazy build differs");

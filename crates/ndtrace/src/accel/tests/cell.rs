@@ -32,7 +32,8 @@ fn cube<const N: usize>(
 fn tree<const N: usize>(simplices: &[[Vector<N>; N]], facets: &[usize], cells: bool) -> Bvh<N> {
     let ids: Vec<u32> = (0..simplices.len() as u32).map(|i| 3 * i + 1).collect();
     let bounds = simplices.iter().map(|s| simplex_bounds(s)).collect();
-    let prepare = |id: u32| PreparedSimplex::new(&simplices[(id / 3) as usize]).unwrap();
+    let owned = simplices.to_vec();
+    let prepare = move |id: u32| PreparedSimplex::new(&owned[(id / 3) as usize]).unwrap();
     if !cells {
         return Bvh::build_lazily(ids, bounds, prepare);
     }
@@ -190,7 +191,7 @@ fn walk_finds_the_simplex_hit<const N: usize>() {
             .find(|c| {
                 c.blocks().any(|b| {
                     let blk = &celled.blocks[b as usize];
-                    blk.ids[..blk.count as usize].contains(&(3 * s as u32 + 1))
+                    blk.ids[..blk.count()].contains(&(3 * s as u32 + 1))
                 })
             })
             .unwrap();
@@ -273,13 +274,15 @@ fn accel_pieces_that_are_not_flat_convex_cells_stay_simplices() {
     for piece in [l_shape, lifted, twice] {
         let ids: Vec<u32> = (0..piece.len() as u32).collect();
         let bounds = piece.iter().map(|s| simplex_bounds(s)).collect::<Vec<_>>();
-        let prepare = |id: u32| PreparedSimplex::new(&piece[id as usize]).unwrap();
+        let owned = piece.clone();
+        let prepare = move |id: u32| PreparedSimplex::new(&owned[id as usize]).unwrap();
         let cells = vec![FlatCell {
             members: ids.clone(),
             points: piece.clone(),
         }];
-        let celled = Bvh::build_lazily_with_cells(ids.clone(), bounds.clone(), cells, prepare);
-        let plain = Bvh::build_lazily(ids, bounds, prepare);
+        let celled =
+            Bvh::build_lazily_with_cells(ids.clone(), bounds.clone(), cells, prepare.clone());
+        let plain = Bvh::build_lazily(ids, bounds, prepare.clone());
         assert_eq!(celled.cell_count(), 0);
         for _ in 0..200 {
             let origin = add(&random_vector::<3>(&mut r, 1.0), &[1.0, 1.0, 2.0]);

@@ -167,10 +167,18 @@ fn instances_answer_as_the_world_space_simplices<const N: usize>() {
                 hits += 1;
                 if g.prim == w.prim {
                     agree += 1;
-                    assert!((g.t - w.t).abs() <= 1e-9 * w.t.abs().max(1.0), "N={N}: t");
+                    // Rows rounded to f32 in each space: the hit points differ by ~10⁻⁷ of
+                    // the simplex, over the cosine of the incidence along the ray, and the
+                    // coordinates by that times the simplex's aspect (random simplices in 7D
+                    // have aspects of tens).
+                    let cos = crate::linalg::dot(&w.normal, &ray.dir).abs()
+                        / crate::linalg::norm(&ray.dir);
+                    let tol = 1e-6 / cos;
+                    assert!((g.t - w.t).abs() <= tol * w.t.abs().max(1.0), "N={N}: t");
                     for i in 0..N {
-                        assert!((g.normal[i] - w.normal[i]).abs() < 1e-9, "N={N}: normal");
-                        assert!((g.bary[i] - w.bary[i]).abs() < 1e-7, "N={N}: bary");
+                        assert!((g.normal[i] - w.normal[i]).abs() < 1e-6, "N={N}: normal");
+                        let db = (g.bary[i] - w.bary[i]).abs();
+                        assert!(db < 100.0 * tol, "N={N}: bary {db}, cos {cos}");
                     }
                 }
             } else {

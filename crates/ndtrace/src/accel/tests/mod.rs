@@ -93,13 +93,13 @@ fn brute<const N: usize>(
         if !accept(*id) {
             continue;
         }
-        if let Some((t, bary)) = p.intersect(ray, tmin, tmax) {
+        if let Some((t, bary)) = p.intersect_stored(ray, tmin, tmax) {
             if best.is_none_or(|b| t < b.t || (t == b.t && *id < b.prim)) {
                 best = Some(Hit {
                     t,
                     prim: *id,
                     bary,
-                    normal: p.normal(),
+                    normal: p.rounded_rows()[0],
                 });
             }
         }

@@ -25,7 +25,7 @@ fn accel_morton_build_matches_brute_force_in_every_dimension() {
     fn check<const N: usize>() {
         let mut r = rng(9100 + N as u64);
         let pts = morton_input::<N>(&mut r, 700);
-        let bvh = Bvh::build_morton(pts.len(), domain(&pts), |i| pts[i]);
+        let bvh = morton_of(&pts);
         let prims: Vec<(PreparedSimplex<N>, u32)> = (0..pts.len())
             .filter_map(|i| Some((PreparedSimplex::new(&pts[i])?, i as u32)))
             .collect();
@@ -35,7 +35,7 @@ fn accel_morton_build_matches_brute_force_in_every_dimension() {
         // where degenerate simplices were dropped.
         let mut seen = HashSet::new();
         for b in &bvh.blocks {
-            for &id in &b.ids[..b.count as usize] {
+            for &id in &b.ids[..b.count()] {
                 assert!(seen.insert(id), "N={N}: id {id} twice");
             }
         }
@@ -43,7 +43,7 @@ fn accel_morton_build_matches_brute_force_in_every_dimension() {
         let full = bvh
             .blocks
             .iter()
-            .filter(|b| b.count as usize == BLOCK_WIDTH)
+            .filter(|b| b.count() == BLOCK_WIDTH)
             .count();
         assert!(full + pts.len().div_ceil(BLOCK_WIDTH) / 10 >= bvh.blocks.len());
         let sah = {
@@ -96,12 +96,12 @@ fn accel_morton_build_is_deterministic_for_any_thread_count() {
     fn check<const N: usize>() {
         let mut r = rng(9200 + N as u64);
         let pts = morton_input::<N>(&mut r, 3000);
-        let a = Bvh::build_morton(pts.len(), domain(&pts), |i| pts[i]);
+        let a = morton_of(&pts);
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
             .unwrap();
-        let b = pool.install(|| Bvh::build_morton(pts.len(), domain(&pts), |i| pts[i]));
+        let b = pool.install(|| morton_of(&pts));
         assert!(a == b, "N={N}: one-thread build differs");
         assert!(a.node_count() > 1 && a.depth() > 2);
     }
@@ -179,12 +179,12 @@ fn accel_morton_build_of_a_large_soup_groups_in_parallel_and_matches_brute_force
         .into_iter()
         .map(|(p, _)| p)
         .collect();
-    let bvh = Bvh::build_morton(pts.len(), domain(&pts), |i| pts[i]);
+    let bvh = morton_of(&pts);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
         .unwrap();
-    assert!(bvh == pool.install(|| Bvh::build_morton(pts.len(), domain(&pts), |i| pts[i])));
+    assert!(bvh == pool.install(|| morton_of(&pts)));
     let prims: Vec<(PreparedSimplex<4>, u32)> = (0..pts.len())
         .filter_map(|i| Some((PreparedSimplex::new(&pts[i])?, i as u32)))
         .collect();
@@ -218,7 +218,7 @@ fn accel_morton_nodes_are_nearly_full_even_on_a_thin_slab() {
             random_simplex(&mut r, &c, 0.03)
         })
         .collect();
-    let bvh = Bvh::build_morton(pts.len(), domain(&pts), |i| pts[i]);
+    let bvh = morton_of(&pts);
     let blocks = bvh.blocks.len();
     let children: usize = (bvh.nodes.iter())
         .map(|n| n.child.iter().filter(|&&c| c != EMPTY_SLOT).count())
@@ -234,4 +234,10 @@ fn accel_morton_nodes_are_nearly_full_even_on_a_thin_slab() {
         "{mean:.2} children per node ({} nodes, {blocks} blocks)",
         bvh.nodes.len()
     );
+}
+
+/// The Morton build over `pts` (ids = indices).
+fn morton_of<const N: usize>(pts: &[[[f64; N]; N]]) -> Bvh<N> {
+    let owned = pts.to_vec();
+    Bvh::build_morton(pts.len(), domain(pts), move |i| owned[i])
 }
