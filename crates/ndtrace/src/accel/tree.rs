@@ -67,8 +67,8 @@ impl<const N: usize> WideNode<N> {
 }
 
 /// A leaf: up to [`BLOCK_WIDTH`] prepared simplices, structure-of-arrays (lane = simplex), with
-/// the rows `n̂, r_1 … r_{N−1}` rounded to f32 (see `simplex.rs`, "Rounded rows") and `x_0`
-/// exact. `x0` and `n̂`, all that a test reads before its early exit, come first and lie
+/// the rows `n̂, r_1 … r_{N−1}` rounded to f32 (tested by `PreparedSimplex::hit_rounded`) and
+/// `x_0` exact. `x0` and `n̂`, all that a test reads before its early exit, come first and lie
 /// together. 100 bytes per lane in 4D (160 + 4 in f64).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
