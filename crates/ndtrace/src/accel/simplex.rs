@@ -214,7 +214,8 @@ pub(super) const ROUNDING: f64 = 2.0 * PLANE_ROUNDING;
 /// What the test with rounded rows ([`PreparedSimplex::hit_rounded`]) says of one lane.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct RoundedHit<const N: usize> {
-    /// The exact test ([`PreparedSimplex::hit`]) hits, and `t`, `u` are the rounded ones.
+    /// A hit: the exact test ([`PreparedSimplex::hit`]) finds the ray inside, and the rounded
+    /// t (the hit's, as `u`) lies in the range.
     pub(super) hit: bool,
     /// The rounding could decide either way: only the exact test can tell.
     pub(super) unsure: bool,
@@ -234,7 +235,7 @@ impl<const N: usize> PreparedSimplex<N> {
     /// the exact test finds the ray inside the simplex and not parallel to it, the rounded
     /// rows decide: a hit when their t lies in (tmin, tmax), with their t and coordinates
     /// (within ~10⁻⁷ relative of the exact ones). Where it shows that the exact test misses,
-    /// a miss. Otherwise (a ray within ~10⁻⁷ of the simplex's boundary or of parallel) the lane
+    /// a miss. Otherwise (a ray within ~10⁻⁶ of the simplex's boundary or of parallel) the lane
     /// is `unsure` and the exact test decides: so the hits near shared ridges are exactly
     /// those of the exact test, and a closed mesh stays watertight. What a lane says does not
     /// depend on tmin and tmax beyond the range test of its t, so a closest hit is the same
