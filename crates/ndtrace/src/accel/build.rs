@@ -523,7 +523,8 @@ impl<const N: usize> Bvh<N> {
 
     /// [`Bvh::build`] without a list of prepared simplices: `prepare(id)` gives the one with
     /// id `id` (a simplex that [`PreparedSimplex::new`] accepts), called once per simplex, in
-    /// parallel, when its block is filled, and kept as the tree's [`ExactSource`]. The same tree and blocks as `build` over the
+    /// parallel, when its block is filled, and kept as the tree's [`ExactSource`]. The same
+    /// tree and blocks as `build` over the
     /// prepared simplices of `ids`, at the memory of the finished tree.
     ///
     /// # Panics

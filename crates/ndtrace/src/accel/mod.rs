@@ -32,8 +32,9 @@
 //! of |X − x_0| of the exact one, [`PLANE_ROUNDING`]); where it shows the exact test misses, a
 //! miss; in between (a ray within ~10⁻⁶ of the simplex's boundary or of parallel: fewer than
 //! one camera ray in 10⁴ over a fine sphere) the lane is *unsure*, and the exact test of the
-//! simplex, prepared again from the scene's vertices ([`ExactSource`]), decides. So every decision at a shared ridge is the
-//! exact test's, and closed meshes stay watertight with the same `BARY_SLACK`.
+//! simplex, prepared again from the scene's vertices ([`ExactSource`]), decides. So every
+//! decision at a shared ridge is the exact test's, and closed meshes stay watertight with the
+//! same `BARY_SLACK`.
 //!
 //! ## 2. Build: binned SAH (`build.rs`)
 //! [`Bvh::build`] first builds a binary tree of N-D axis-aligned boxes (each simplex's box padded
