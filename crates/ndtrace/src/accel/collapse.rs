@@ -10,6 +10,10 @@ use super::tree::{
 
 /// The mark of a flat cell in the leaf order: `CELL_MARK | c` is cell c of the build's list.
 pub(super) const CELL_MARK: u32 = 1 << 31;
+/// How far ahead in the leaf order the fill asks for the simplices' references, and then for
+/// what they point to (see `wide_tree`).
+const WARM_FAR: usize = 3 * BLOCK_WIDTH;
+const WARM_NEAR: usize = BLOCK_WIDTH;
 use rayon::prelude::*;
 
 /// A leaf block as the layout places it, filled once the layout is done (and the binary tree
@@ -48,48 +52,16 @@ pub(super) struct CollapsePlan {
 }
 
 impl CollapsePlan {
+    /// The plan of the binary tree `bin` (in depth-first order), by a walk that returns each
+    /// subtree's costs to its parent (no list of them is kept), forking for subtrees of at
+    /// least `PLAN_PAR_MIN` nodes. Every row depends on its children's only, so the plan is the
+    /// same for any number of threads.
     pub(super) fn new<const N: usize>(bin: &[BinaryNode<N>]) -> Self {
         let n = bin.len();
-        let mut cost = vec![[0.0f64; NODE_WIDTH]; n];
         let mut slots = vec![[[0u8; 2]; NODE_WIDTH]; n];
         let mut wide = vec![[0u8; 2]; n];
-        // Children come after their parent in depth-first order: one pass from the end.
-        for b in (0..n).rev() {
-            if bin[b].count > 0 {
-                continue;
-            }
-            let (l, r) = (b + 1, bin[b].first as usize);
-            // The best sharing of k slots between the children (ties: fewest to the left).
-            let share = |k: usize| {
-                let mut best = (f64::INFINITY, [1u8, (k - 1) as u8]);
-                for j in 1..k {
-                    let c = cost[l][j - 1] + cost[r][k - j - 1];
-                    if c < best.0 {
-                        best = (c, [j as u8, (k - j) as u8]);
-                    }
-                }
-                best
-            };
-            let (d, w) = share(NODE_WIDTH);
-            let mut row = [(0.0, [0u8; 2]); NODE_WIDTH];
-            // A NaN area (from infinite bounds) counts as infinite.
-            let area = half_area(&bin[b].min.map(f64::from), &bin[b].max.map(f64::from));
-            row[0].0 = if area.is_nan() { f64::INFINITY } else { area } + d;
-            for k in 2..=NODE_WIDTH {
-                // D(b, NODE_WIDTH) is already known.
-                let (c, how) = if k == NODE_WIDTH { (d, w) } else { share(k) };
-                // Opening b must gain: on a tie, fewer slots.
-                row[k - 1] = if c < row[k - 2].0 {
-                    (c, how)
-                } else {
-                    row[k - 2]
-                };
-            }
-            wide[b] = w;
-            for k in 0..NODE_WIDTH {
-                cost[b][k] = row[k].0;
-                slots[b][k] = row[k].1;
-            }
+        if n > 0 {
+            plan_subtree(bin, 0, &mut slots, &mut wide);
         }
         CollapsePlan { slots, wide }
     }
@@ -111,6 +83,68 @@ impl CollapsePlan {
             }
         }
     }
+}
+
+/// Subtrees of at least this many binary nodes are planned in parallel.
+pub(super) const PLAN_PAR_MIN: usize = 1 << 14;
+
+/// Plans the subtree of binary node b, whose nodes' rows of `slots` and `wide` are the given
+/// slices (node b first, in depth-first order), and returns its costs `S(b, k)`.
+fn plan_subtree<const N: usize>(
+    bin: &[BinaryNode<N>],
+    b: usize,
+    slots: &mut [[[u8; 2]; NODE_WIDTH]],
+    wide: &mut [[u8; 2]],
+) -> [f64; NODE_WIDTH] {
+    if bin[b].count > 0 {
+        return [0.0; NODE_WIDTH];
+    }
+    // Node b, its left subtree from b + 1, its right one from `first`.
+    let (size, right) = (slots.len(), bin[b].first as usize - b);
+    let (me, rest) = slots.split_at_mut(1);
+    let (left_slots, right_slots) = rest.split_at_mut(right - 1);
+    let (me_wide, rest) = wide.split_at_mut(1);
+    let (left_wide, right_wide) = rest.split_at_mut(right - 1);
+    let (l, r) = if size >= PLAN_PAR_MIN {
+        rayon::join(
+            || plan_subtree(bin, b + 1, left_slots, left_wide),
+            || plan_subtree(bin, b + right, right_slots, right_wide),
+        )
+    } else {
+        (
+            plan_subtree(bin, b + 1, left_slots, left_wide),
+            plan_subtree(bin, b + right, right_slots, right_wide),
+        )
+    };
+    // The best sharing of k slots between the children (ties: fewest to the left).
+    let share = |k: usize| {
+        let mut best = (f64::INFINITY, [1u8, (k - 1) as u8]);
+        for j in 1..k {
+            let c = l[j - 1] + r[k - j - 1];
+            if c < best.0 {
+                best = (c, [j as u8, (k - j) as u8]);
+            }
+        }
+        best
+    };
+    let (d, w) = share(NODE_WIDTH);
+    let mut row = [(0.0, [0u8; 2]); NODE_WIDTH];
+    // A NaN area (from infinite bounds) counts as infinite.
+    let area = half_area(&bin[b].min.map(f64::from), &bin[b].max.map(f64::from));
+    row[0].0 = if area.is_nan() { f64::INFINITY } else { area } + d;
+    for k in 2..=NODE_WIDTH {
+        // D(b, NODE_WIDTH) is already known.
+        let (c, how) = if k == NODE_WIDTH { (d, w) } else { share(k) };
+        // Opening b must gain: on a tie, fewer slots.
+        row[k - 1] = if c < row[k - 2].0 {
+            (c, how)
+        } else {
+            row[k - 2]
+        };
+    }
+    me_wide[0] = w;
+    me[0] = row.map(|(_, how)| how);
+    row.map(|(c, _)| c)
 }
 
 /// Collapses the binary tree into wide nodes and blocks (both in depth-first order).
@@ -223,13 +257,17 @@ pub(super) fn id_ranges<const N: usize>(
     blocks: &[LeafBlock<N>],
     cells: &[Cell],
 ) -> Vec<[[u32; NODE_WIDTH]; 2]> {
-    let block_range = |b: &LeafBlock<N>| {
-        let ids = &b.ids[..b.count()];
-        (
-            ids.iter().copied().min().unwrap(),
-            ids.iter().copied().max().unwrap(),
-        )
-    };
+    // Each block's, in parallel (the blocks were just filled by all threads).
+    let block_ranges: Vec<(u32, u32)> = (blocks.par_iter())
+        .map(|b| {
+            let ids = &b.ids[..b.count()];
+            (
+                ids.iter().copied().min().unwrap(),
+                ids.iter().copied().max().unwrap(),
+            )
+        })
+        .collect();
+    let block_range = |b: u32| block_ranges[b as usize];
     let mut ranges = vec![[[u32::MAX; NODE_WIDTH], [0; NODE_WIDTH]]; nodes.len()];
     for i in (0..nodes.len()).rev() {
         for l in 0..NODE_WIDTH {
@@ -239,10 +277,10 @@ pub(super) fn id_ranges<const N: usize>(
             } else if c & (LEAF_TAG | CELL_TAG) == LEAF_TAG | CELL_TAG {
                 let cell = &cells[(c & !(LEAF_TAG | CELL_TAG)) as usize];
                 cell.blocks()
-                    .map(|b| block_range(&blocks[b as usize]))
+                    .map(block_range)
                     .fold((u32::MAX, 0), |(a, b), (c, d)| (a.min(c), b.max(d)))
             } else if c & LEAF_TAG != 0 {
-                block_range(&blocks[(c & !LEAF_TAG) as usize])
+                block_range(c & !LEAF_TAG)
             } else {
                 let r = &ranges[c as usize];
                 (
@@ -275,7 +313,10 @@ pub(super) struct WideTree<const N: usize> {
 pub(super) fn wide_tree<const N: usize>(
     bin: Vec<BinaryNode<N>>,
     order: &[u32],
-    prepare: impl Fn(usize) -> PreparedSimplex<N> + Sync,
+    (prepare, warm): (
+        impl Fn(usize) -> PreparedSimplex<N> + Sync,
+        impl Fn(usize, bool) + Sync,
+    ),
     ids: &[u32],
     cells: &[(Vec<u32>, CellGeometry<N>)],
 ) -> WideTree<N> {
@@ -321,8 +362,20 @@ pub(super) fn wide_tree<const N: usize>(
             let mut block = LeafBlock::EMPTY;
             match p {
                 Pending::Order { first, count } => {
-                    for l in 0..count as usize {
-                        let i = order[first as usize + l] as usize;
+                    let (first, count) = (first as usize, count as usize);
+                    // The simplices of the next blocks in leaf order are asked for ahead
+                    // (`warm`): in a large mesh each lies somewhere else in memory, and the
+                    // lanes would wait for it in turn. Their references first, far ahead; the
+                    // data they point to once the references are likely in.
+                    for (ahead, near) in [(WARM_FAR, false), (WARM_NEAR, true)] {
+                        let end = (first + ahead + count).min(order.len());
+                        let at = (first + ahead).min(end)..end;
+                        for &i in order[at].iter().filter(|&&i| i & CELL_MARK == 0) {
+                            warm(i as usize, near);
+                        }
+                    }
+                    for l in 0..count {
+                        let i = order[first + l] as usize;
                         block.set_lane(l, &prepare(i), ids[i]);
                     }
                 }

@@ -40,9 +40,10 @@
 //! [`Bvh::build`] first builds a binary tree of N-D axis-aligned boxes (each simplex's box padded
 //! to hold its `BARY_SLACK` band) with the surface area heuristic, whose weight in N dimensions is
 //! half the (N−1)-measure of a box's boundary (Cauchy's formula): 16 bins per axis over the
-//! centroid bounds, leaves of at most [`MAX_LEAF`] simplices, object-median splits when SAH cannot
-//! split or the tree gets deep. The build is parallel (rayon) for large inputs and produces the
-//! same tree for any number of threads.
+//! centroid bounds at the root (below a binned split, over twice the node's box, which its bins
+//! give without another pass over its simplices), leaves of at most [`MAX_LEAF`] simplices,
+//! object-median splits when SAH cannot split or the tree gets deep. The build is parallel
+//! (rayon) for large inputs and produces the same tree for any number of threads.
 //!
 //! Very large inputs (the scene build switches at [`MORTON_MIN`] simplices) skip the SAH and the
 //! collapse: [`Bvh::build_morton`] sorts the simplices along a Morton curve, packs runs of 4
@@ -126,9 +127,10 @@ mod tests;
 
 /// The ray and hit types of the queries, re-exported from [`crate::ray`].
 pub use crate::ray::{Hit, Ray};
-pub(crate) use build::BOX_PAD;
+pub(crate) use build::{Ref as BuildRef, BOX_PAD};
 pub use cell::FlatCell;
 pub use instance::{Instances, ToObject};
+pub(crate) use kernels::prefetch_of;
 pub use morton::MORTON_MIN;
 pub use packet::PACKET;
 pub use simplex::{simplex_bounds, Bounds, PreparedSimplex, BARY_SLACK, PLANE_ROUNDING};

@@ -9,8 +9,8 @@ use super::fields::{coefficient, matrix_rows, mesh_from_rows, rgb, vec_n, R};
 use super::mesh_file::{orientation_warning, read_mesh, MeshReader};
 use super::transform::transform;
 use crate::accel::{
-    simplex_bounds, Bounds, Bvh, ExactSource, FlatCell, Instances, PreparedSimplex, ToObject,
-    MORTON_MIN,
+    prefetch_of, simplex_bounds, Bounds, BuildRef, Bvh, ExactSource, FlatCell, Instances,
+    PreparedSimplex, ToObject, MORTON_MIN,
 };
 use crate::camera::{look_at_orientation, Camera};
 use crate::linalg::{
@@ -1431,12 +1431,14 @@ fn sah_bvh<const N: usize>(
     members: &[usize],
     shadows: bool,
 ) -> Bvh<N> {
-    // Which simplices are not degenerate, with their bounds (and, for the convexity
-    // certificates, their normals); the prepared simplices themselves are made again where
-    // the BVH's blocks are filled, so that no list of them is alive beside the blocks.
-    let mut ids = Vec::new();
-    let mut bounds = Vec::new();
+    // Each simplex's build record, its global id in place of its input index and `DROPPED`'s
+    // for a degenerate one (and, for the convexity certificates, its normal), in one parallel
+    // pass in simplex order; the prepared simplices themselves are made again where the BVH's
+    // blocks are filled, so that no list of them is alive beside the blocks.
+    const DROPPED: u32 = u32::MAX;
+    let mut refs: Vec<BuildRef<N>> = Vec::new();
     let mut cells = Vec::new();
+    let mut dropped = 0;
     for &k in members {
         let (o, off, d) = (&mut objects[k], offsets[k], &descs[k]);
         // Convexity certificates, which only shadow rays use. An elevation map is not
@@ -1448,53 +1450,59 @@ fn sah_bvh<const N: usize>(
         let search = d.shape == ShapeKind::Hypercube
             || (d.shape == ShapeKind::Mesh && o.mesh.simplices.len() <= MAX_FLAT_SEARCH);
         let count = o.mesh.simplices.len();
-        let kept: Vec<(u32, Bounds<N>)>;
+        let record = |s: usize| {
+            let pts = o.mesh.simplex_points(s);
+            let p = PreparedSimplex::new(&pts)?;
+            Some((
+                BuildRef::new(off + s as u32, &simplex_bounds(&pts)),
+                p.normal(),
+            ))
+        };
+        let none = BuildRef::new(DROPPED, &([0.0; N], [0.0; N]));
+        let mut mine = vec![none; count];
+        let mut normals = vec![[0.0; N]; if certify { count } else { 0 }];
         if certify {
-            let records: Vec<(Vector<N>, Option<Bounds<N>>)> = (0..count)
-                .into_par_iter()
-                .map(|s| {
-                    let pts = o.mesh.simplex_points(s);
-                    match PreparedSimplex::new(&pts) {
-                        Some(p) => (p.normal(), Some(simplex_bounds(&pts))),
-                        None => ([0.0; N], None),
-                    }
-                })
-                .collect();
-            let normals: Vec<Vector<N>> = records.par_iter().map(|r| r.0).collect();
-            o.convex = crate::convex::convex_side(&o.mesh, &normals, known_convex(d.shape));
-            if search {
-                let normal = |s: usize| records[s].1.map(|_| normals[s]);
-                for piece in crate::mesh::flat::flat_pieces(&o.mesh, normal, MIN_CELL) {
-                    cells.push((off, piece));
+            (mine.par_iter_mut().zip(&mut normals).enumerate()).for_each(|(s, (r, n))| {
+                if let Some((rec, normal)) = record(s) {
+                    (*r, *n) = (rec, normal);
                 }
-            }
-            kept = (records.into_par_iter().enumerate())
-                .filter_map(|(s, (_, b))| Some((off + s as u32, b?)))
-                .collect();
+            });
         } else {
-            kept = (0..count)
-                .into_par_iter()
-                .filter_map(|s| {
-                    let pts = o.mesh.simplex_points(s);
-                    PreparedSimplex::new(&pts).map(|_| (off + s as u32, simplex_bounds(&pts)))
-                })
-                .collect();
-            if search {
-                // The normals made again where they are needed (no list of them is kept).
-                let normal =
-                    |s: usize| PreparedSimplex::new(&o.mesh.simplex_points(s)).map(|p| p.normal());
-                for piece in crate::mesh::flat::flat_pieces(&o.mesh, normal, MIN_CELL) {
-                    cells.push((off, piece));
+            (mine.par_iter_mut().enumerate()).for_each(|(s, r)| {
+                if let Some((rec, _)) = record(s) {
+                    *r = rec;
                 }
+            });
+        }
+        dropped += mine.par_iter().filter(|r| r.id == DROPPED).count();
+        if certify {
+            o.convex = crate::convex::convex_side(&o.mesh, &normals, known_convex(d.shape));
+        }
+        if search {
+            // Without certificates the normals are made again where they are needed (no list
+            // of them is kept).
+            let kept = |s: usize| mine[s].id != DROPPED;
+            let normal = |s: usize| match certify {
+                true => kept(s).then(|| normals[s]),
+                false => PreparedSimplex::new(&o.mesh.simplex_points(s)).map(|p| p.normal()),
+            };
+            for piece in crate::mesh::flat::flat_pieces(&o.mesh, normal, MIN_CELL) {
+                cells.push((off, piece));
             }
         }
-        ids.reserve(kept.len());
-        bounds.reserve(kept.len());
-        for (id, b) in kept {
-            ids.push(id);
-            bounds.push(b);
+        if refs.is_empty() {
+            refs = mine;
+        } else {
+            refs.extend_from_slice(&mine);
         }
     }
+    if dropped > 0 {
+        refs.retain(|r| r.id != DROPPED);
+    }
+    // The global ids, and the records numbered as the build's inputs.
+    let ids: Vec<u32> = (refs.par_iter_mut().enumerate())
+        .map(|(i, r)| std::mem::replace(&mut r.id, i as u32))
+        .collect();
     // The flat pieces as cells over the build's inputs (`ids`: the global ids of the
     // non-degenerate simplices, increasing; a piece has no degenerate simplex).
     let cells = cells
@@ -1514,10 +1522,23 @@ fn sah_bvh<const N: usize>(
             FlatCell { members, points }
         })
         .collect();
-    Bvh::build_with_cells_borrowing(ids, bounds, cells, |g| {
+    let prepare = |g: u32| {
         PreparedSimplex::new(&simplex_at(objects, offsets, g as usize))
             .expect("a simplex prepared once prepares again")
-    })
+    };
+    // What `prepare(g)` will read: the simplex's vertex indices, then (`near`) its vertices.
+    let warm = |g: u32, near: bool| {
+        let o = offsets.partition_point(|&off| off <= g) - 1;
+        let mesh = &objects[o].mesh;
+        let idx = &mesh.simplices[(g - offsets[o]) as usize];
+        if near {
+            idx.iter()
+                .for_each(|&v| prefetch_of(&mesh.vertices[v as usize]));
+        } else {
+            prefetch_of(idx);
+        }
+    };
+    Bvh::build_with_cells_borrowing(ids, refs, cells, (prepare, warm))
 }
 
 /// Fewest simplices an object with a transform needs to be traced in its own space, in a tree

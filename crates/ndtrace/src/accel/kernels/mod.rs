@@ -97,6 +97,16 @@ pub(in crate::accel) fn prefetch_block<const N: usize>(block: *const LeafBlock<N
     x86_64::prefetch(block.cast::<i8>(), bytes);
 }
 
+/// Asks for the cache lines of `*x` ahead of its use (no result changes; nothing on other
+/// targets than x86-64).
+#[inline(always)]
+pub(crate) fn prefetch_of<T>(x: &T) {
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+    #[cfg(target_arch = "x86_64")]
+    x86_64::prefetch((x as *const T).cast::<i8>(), size_of::<T>().max(1));
+}
+
 /// The bit sets of the slots of `child` holding a leaf or nothing (those whose reference has
 /// the `LEAF_TAG` bit) and of those holding nothing.
 #[inline(always)]

@@ -29,7 +29,7 @@ fn wide_collapse_is_optimal<const N: usize>() {
         let count = r.random_range(30..70);
         let s = soup::<N>(&mut r, count);
         let bounds: Vec<Bounds<N>> = s.iter().map(|(p, _)| simplex_bounds(p)).collect();
-        let (bin, _) = binary_tree(bounds, PAR_MIN, u32::MAX);
+        let (bin, _) = binary_tree(refs_of(&bounds), PAR_MIN, u32::MAX);
         let area = |b: usize| half_area(&bin[b].min.map(f64::from), &bin[b].max.map(f64::from));
         let inner: Vec<usize> = (1..bin.len()).filter(|&b| bin[b].count == 0).collect();
         if bin[0].count > 0 || inner.len() > 15 {
@@ -86,4 +86,45 @@ fn wide_collapse_is_optimal<const N: usize>() {
 #[test]
 fn accel_wide_collapse_is_optimal() {
     for_each_dim!(wide_collapse_is_optimal);
+}
+
+/// The plan of a tree large enough to be planned in parallel is the same with one thread and
+/// with several, and lays out every leaf once in wide nodes of 2 to 8 children.
+fn plan_in_parallel_is_deterministic<const N: usize>() {
+    let mut r = rng(4600 + N as u64);
+    let s = soup::<N>(&mut r, 80_000);
+    let bounds: Vec<Bounds<N>> = s.iter().map(|(p, _)| simplex_bounds(p)).collect();
+    let (bin, _) = binary_tree(refs_of(&bounds), PAR_MIN, u32::MAX);
+    assert!(bin.len() > 2 * PLAN_PAR_MIN, "N={N}: a small tree");
+    let plans: Vec<CollapsePlan> = [1, 3]
+        .map(|threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| CollapsePlan::new(&bin))
+        })
+        .into();
+    assert!(
+        plans[0].slots == plans[1].slots && plans[0].wide == plans[1].wide,
+        "N={N}"
+    );
+    let layout = wide_layout(&bin, &plans[1]);
+    assert!(layout
+        .iter()
+        .all(|(_, kids)| (2..=NODE_WIDTH).contains(&kids.len())));
+    let leaves = layout
+        .iter()
+        .flat_map(|(_, kids)| kids)
+        .filter(|&&c| bin[c].count > 0);
+    assert_eq!(
+        leaves.count(),
+        bin.iter().filter(|b| b.count > 0).count(),
+        "N={N}"
+    );
+}
+
+#[test]
+fn accel_plan_in_parallel_is_deterministic() {
+    for_each_dim!(plan_in_parallel_is_deterministic);
 }

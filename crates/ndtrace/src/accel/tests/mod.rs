@@ -12,8 +12,8 @@ mod simplex;
 mod traverse;
 mod tree;
 
-use super::build::{binary_tree, PAR_MIN};
-use super::collapse::CollapsePlan;
+use super::build::{binary_tree, refs_of, PAR_MIN};
+use super::collapse::{CollapsePlan, PLAN_PAR_MIN};
 use super::kernels::leaf_slots;
 use super::packet::{Packet, TraversalRay, PACKET};
 use super::simplex::{simplex_bounds, Bounds, PreparedRay, PreparedSimplex};
