@@ -306,7 +306,8 @@ pub(super) struct WideTree<const N: usize> {
 
 /// The wide tree over the binary tree `bin` with leaf order `order` (input indices, and
 /// `CELL_MARK | c` for the flat cells `cells`), laid out by the [`CollapsePlan`]; `prepare(i)`
-/// and `ids[i]` are the input simplices. The binary tree and the plan are dropped once the
+/// and `ids[i]` are the input simplices, and `warm(i, near)` asks for what `prepare(i)` reads
+/// (`near`: after its reference). The binary tree and the plan are dropped once the
 /// layout is known, before the blocks are made; their simplices are then prepared in
 /// parallel, so that neither the binary tree nor a list of prepared simplices is alive beside
 /// the blocks.

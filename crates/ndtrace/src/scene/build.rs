@@ -1369,8 +1369,6 @@ fn offsets_of<const N: usize>(objects: &[Object<N>]) -> (Vec<u32>, u64) {
     (offsets, total)
 }
 
-/// The points of global simplex g of the objects whose first global ids are `offsets` (what
-/// [`Scene::locate`] does, before there is a scene).
 /// Where the tree over the objects `members` finds the exact simplex of a global id: their
 /// meshes in `objects`, with the vertices of `own[k]` for an object held in its own space.
 fn exact_source<const N: usize>(
@@ -1396,6 +1394,8 @@ fn exact_source<const N: usize>(
     })
 }
 
+/// The points of global simplex g of the objects whose first global ids are `offsets` (what
+/// [`Scene::locate`] does, before there is a scene).
 fn simplex_at<const N: usize>(objects: &[Object<N>], offsets: &[u32], g: usize) -> [Vector<N>; N] {
     let o = offsets.partition_point(|&off| off as usize <= g) - 1;
     objects[o].mesh.simplex_points(g - offsets[o] as usize)
@@ -1431,8 +1431,8 @@ fn sah_bvh<const N: usize>(
     members: &[usize],
     shadows: bool,
 ) -> Bvh<N> {
-    // Each simplex's build record, its global id in place of its input index and `DROPPED`'s
-    // for a degenerate one (and, for the convexity certificates, its normal), in one parallel
+    // Each simplex's build record (holding, for now, its global id, or `DROPPED` for a
+    // degenerate simplex) and, for the convexity certificates, its normal, in one parallel
     // pass in simplex order; the prepared simplices themselves are made again where the BVH's
     // blocks are filled, so that no list of them is alive beside the blocks.
     const DROPPED: u32 = u32::MAX;
