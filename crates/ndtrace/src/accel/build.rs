@@ -598,9 +598,9 @@ impl<const N: usize> Bvh<N> {
     }
 
     /// [`Bvh::build_lazily_with_cells`] over the build records of the simplices (`refs[i]`
-    /// input i's, with id i), with a `prepare` that may borrow and a `warm` as
-    /// `build_from` takes it: the tree has no exact source
-    /// until [`Bvh::set_exact`] gives it one (the scene's, once its objects are shared).
+    /// input i's, with id i), with a `prepare` that may borrow and a `warm` as `build_from`
+    /// takes it: the tree has no exact source until [`Bvh::set_exact`] gives it one (the
+    /// scene's, once its objects are shared).
     pub(crate) fn build_with_cells_borrowing(
         ids: Vec<u32>,
         refs: Vec<Ref<N>>,
@@ -678,7 +678,8 @@ impl<const N: usize> Bvh<N> {
             let plain: Vec<u32> = (0..n as u32).filter(|&i| !in_cell[i as usize]).collect();
             drop(in_cell);
             // The plain records renumbered, then one per cell: the union of its members'
-            // (each contains its simplex's band, so the union contains all of them).
+            // (each contains its simplex's band, so the union contains all of them; a cell
+            // that passed `CellGeometry::new` has at least 2 members).
             let mut prims: Vec<Ref<N>> = (plain.iter().enumerate())
                 .map(|(p, &i)| Ref {
                     id: p as u32,
