@@ -120,8 +120,8 @@ impl<const N: usize> NodeBounds<N> {
     /// The bounds of the simplices of `bins`: their box exactly, and for the centres twice
     /// that box (which holds them), so that a side of a binned split needs no pass over its
     /// records. Its bins then span the side's box rather than its centres: where the simplices
-    /// are small beside the node, much the same; the rays' node and leaf visits over the
-    /// test meshes changed by under 1 %.
+    /// are small beside the node, much the same; the rays' node and leaf visits and slab
+    /// tests over icospheres and a 3-sphere changed by 1.2 % at most.
     fn of_bins(bins: &[SahBin<N>]) -> Self {
         let mut u = SahBin::EMPTY;
         for b in bins {
