@@ -5,7 +5,8 @@ use super::cell::{CellGeometry, FlatCell};
 use super::collapse::{id_ranges, wide_tree, CELL_MARK};
 use super::simplex::{simplex_bounds, Bounds, PreparedSimplex};
 use super::tree::{
-    f32_down, f32_up, half_area, BinaryNode, Bvh, ExactSource, BLOCK_WIDTH, LEAF_TAG, MAX_LEAF,
+    f32_down, f32_up, half_area, BinaryNode, Bvh, ExactSource, Lane, BLOCK_WIDTH, LEAF_TAG,
+    MAX_LEAF,
 };
 use crate::mesh::Mesh;
 use rayon::prelude::*;
@@ -25,13 +26,40 @@ const PAR_CHUNK: usize = 8 * 1024;
 /// `diameter ≤ √N·max extent ≤ 3·max extent`).
 pub(crate) const BOX_PAD: f64 = 1e-8;
 
+/// A box as `[lo, −hi]`: its lower corner and its upper corner negated, so that the union of
+/// two boxes is one elementwise minimum over 2N lanes (packed `minps`; negation is exact, so
+/// every bound is the one a `[lo, hi]` box would give).
+type NegBox<const N: usize> = [[f32; N]; 2];
+
+/// The empty [`NegBox`]: every lane +∞.
+#[inline(always)]
+const fn empty_box<const N: usize>() -> NegBox<N> {
+    [[f32::INFINITY; N]; 2]
+}
+
+/// Grows `acc` to contain `x` (see [`lesser`]: one `minps` per 4 lanes).
+#[inline(always)]
+fn grow_box<const N: usize>(acc: &mut NegBox<N>, x: &NegBox<N>) {
+    for (a, &x) in acc.as_flattened_mut().iter_mut().zip(x.as_flattened()) {
+        *a = lesser(*a, x);
+    }
+}
+
+/// The upper corner of a [`NegBox`].
+#[inline(always)]
+fn upper<const N: usize>(b: &NegBox<N>) -> [f32; N] {
+    b[1].map(|x| -x)
+}
+
 /// A simplex during the build: its padded box rounded outward to f32 and its input index.
 /// The build partitions these records in place, so every pass over a node reads memory in
-/// order (not through an index array).
+/// order (not through an index array). Aligned to 8 bytes: in 3D its 28 bytes then take 32,
+/// which copy as two 16-byte halves rather than two overlapping ones, so that a partition
+/// reading a record just written gets it forwarded from the store.
 #[derive(Clone, Copy)]
+#[repr(C, align(8))]
 pub(crate) struct Ref<const N: usize> {
-    lo: [f32; N],
-    hi: [f32; N],
+    b: NegBox<N>,
     /// The input index (the scene's pass over its meshes puts a global id here first).
     pub(crate) id: u32,
 }
@@ -44,68 +72,58 @@ impl<const N: usize> Ref<N> {
         let ext = (0..N).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
         let pad = BOX_PAD * ext;
         Ref {
-            lo: std::array::from_fn(|i| f32_down(lo[i] - pad)),
-            hi: std::array::from_fn(|i| f32_up(hi[i] + pad)),
+            b: [
+                std::array::from_fn(|i| f32_down(lo[i] - pad)),
+                std::array::from_fn(|i| -f32_up(hi[i] + pad)),
+            ],
             id,
         }
     }
 
     /// The smallest record containing both boxes, with `self`'s id.
     fn union(mut self, o: &Self) -> Self {
-        for i in 0..N {
-            self.lo[i] = self.lo[i].min(o.lo[i]);
-            self.hi[i] = self.hi[i].max(o.hi[i]);
-        }
+        grow_box(&mut self.b, &o.b);
         self
     }
 
-    /// Twice the box centre on axis `a` (the factor 2 cancels in the binning).
+    /// Twice the box centre on axis `a`, `lo + hi` (the factor 2 cancels in the binning).
     #[inline(always)]
     fn centre2(&self, a: usize) -> f32 {
-        self.lo[a] + self.hi[a]
+        self.b[0][a] - self.b[1][a]
     }
 }
 
-/// The bounding box of a set of simplices and a box holding their (doubled) centres: what the
-/// split of the node over them needs. The centres' box is exact ([`NodeBounds::of`]) at the
-/// root and after an object-median split, twice the bounding box after a binned one
-/// ([`NodeBounds::of_bins`]).
+/// The bounding box of a set of simplices and a box holding their (doubled) centres, both as
+/// [`NegBox`]es: what the split of the node over them needs. The centres' box is exact
+/// ([`NodeBounds::of`]) at the root and after an object-median split, twice the bounding box
+/// after a binned one ([`NodeBounds::of_bins`]).
 #[derive(Clone, Copy)]
 struct NodeBounds<const N: usize> {
-    bmin: [f32; N],
-    bmax: [f32; N],
-    cmin: [f32; N],
-    cmax: [f32; N],
+    b: NegBox<N>,
+    c: NegBox<N>,
 }
 
 impl<const N: usize> NodeBounds<N> {
     fn empty() -> Self {
         NodeBounds {
-            bmin: [f32::INFINITY; N],
-            bmax: [f32::NEG_INFINITY; N],
-            cmin: [f32::INFINITY; N],
-            cmax: [f32::NEG_INFINITY; N],
+            b: empty_box(),
+            c: empty_box(),
         }
     }
 
     #[inline(always)]
     fn grow(&mut self, r: &Ref<N>) {
-        for i in 0..N {
-            self.bmin[i] = lesser(self.bmin[i], r.lo[i]);
-            self.bmax[i] = greater(self.bmax[i], r.hi[i]);
-            let c = r.centre2(i);
-            self.cmin[i] = lesser(self.cmin[i], c);
-            self.cmax[i] = greater(self.cmax[i], c);
-        }
+        grow_box(&mut self.b, &r.b);
+        let c: NegBox<N> = [
+            std::array::from_fn(|i| r.centre2(i)),
+            std::array::from_fn(|i| -r.centre2(i)),
+        ];
+        grow_box(&mut self.c, &c);
     }
 
     fn merge(mut self, o: Self) -> Self {
-        for i in 0..N {
-            self.bmin[i] = lesser(self.bmin[i], o.bmin[i]);
-            self.bmax[i] = greater(self.bmax[i], o.bmax[i]);
-            self.cmin[i] = lesser(self.cmin[i], o.cmin[i]);
-            self.cmax[i] = greater(self.cmax[i], o.cmax[i]);
-        }
+        grow_box(&mut self.b, &o.b);
+        grow_box(&mut self.c, &o.c);
         self
     }
 
@@ -123,45 +141,44 @@ impl<const N: usize> NodeBounds<N> {
     /// are small beside the node, much the same; the rays' node and leaf visits and slab
     /// tests over icospheres and a 3-sphere changed by 1.2 % at most.
     fn of_bins(bins: &[SahBin<N>]) -> Self {
-        let mut u = SahBin::EMPTY;
-        for b in bins {
-            u.grow(&b.min, &b.max, b.count);
+        let mut u = empty_box();
+        for bin in bins {
+            grow_box(&mut u, &bin.b);
         }
         NodeBounds {
-            bmin: u.min,
-            bmax: u.max,
-            cmin: u.min.map(|x| 2.0 * x),
-            cmax: u.max.map(|x| 2.0 * x),
+            b: u,
+            c: u.map(|side| side.map(|x| 2.0 * x)),
         }
+    }
+
+    /// The extent of the centres on axis `a`.
+    #[inline(always)]
+    fn centre_extent(&self, a: usize) -> f32 {
+        -self.c[1][a] - self.c[0][a]
     }
 }
 
 /// One SAH bin: count and bounds of the simplices whose centre falls in it.
 #[derive(Clone, Copy)]
 struct SahBin<const N: usize> {
+    b: NegBox<N>,
     count: u32,
-    min: [f32; N],
-    max: [f32; N],
 }
 
 impl<const N: usize> SahBin<N> {
     const EMPTY: Self = SahBin {
+        b: empty_box(),
         count: 0,
-        min: [f32::INFINITY; N],
-        max: [f32::NEG_INFINITY; N],
     };
 
     #[inline(always)]
-    fn grow(&mut self, lo: &[f32; N], hi: &[f32; N], count: u32) {
+    fn grow(&mut self, b: &NegBox<N>, count: u32) {
         self.count += count;
-        for i in 0..N {
-            self.min[i] = lesser(self.min[i], lo[i]);
-            self.max[i] = greater(self.max[i], hi[i]);
-        }
+        grow_box(&mut self.b, b);
     }
 
     fn half_area(&self) -> f64 {
-        half_area(&self.min.map(f64::from), &self.max.map(f64::from))
+        half_area(&self.b[0].map(f64::from), &upper(&self.b).map(f64::from))
     }
 }
 
@@ -171,7 +188,7 @@ type SahBins<const N: usize> = [[SahBin<N>; BINS]; N];
 fn merge_bins<const N: usize>(mut a: SahBins<N>, b: &SahBins<N>) -> SahBins<N> {
     for ax in 0..N {
         for k in 0..BINS {
-            a[ax][k].grow(&b[ax][k].min, &b[ax][k].max, b[ax][k].count);
+            a[ax][k].grow(&b[ax][k].b, b[ax][k].count);
         }
     }
     a
@@ -185,28 +202,20 @@ fn blocks_of(n: u32) -> f64 {
 }
 
 /// The bin of a doubled centre coordinate: `⌊(c − cmin)·scale⌋` clamped to the last bin. The
-/// same function bins and partitions, so both agree exactly.
+/// same function bins and partitions, so both agree exactly. Clamped before the conversion,
+/// which then needs no saturation (a NaN, which the build never has, would give bin 0).
 #[inline(always)]
 fn bin_of(c: f32, cmin: f32, scale: f32) -> usize {
-    (((c - cmin) * scale) as usize).min(BINS - 1)
+    ((c - cmin) * scale).clamp(0.0, (BINS - 1) as f32) as u32 as usize
 }
 
 /// `min(acc, x)` for an `acc` that is not NaN: a NaN `x` is ignored, as [`f32::min`] ignores
-/// it, and a tie keeps `acc`. One `minss` where `f32::min` needs four instructions to handle a
-/// NaN `acc` (which the build never has: boxes are never NaN, and a NaN centre is never taken).
+/// it, and a tie keeps `acc`. One `minss` (`minps` over lanes) where `f32::min` needs four
+/// instructions to handle a NaN `acc` (which the build never has: boxes are never NaN, and a
+/// NaN centre is never taken).
 #[inline(always)]
 fn lesser(acc: f32, x: f32) -> f32 {
     if x < acc {
-        x
-    } else {
-        acc
-    }
-}
-
-/// `max(acc, x)` for an `acc` that is not NaN (see [`lesser`]).
-#[inline(always)]
-fn greater(acc: f32, x: f32) -> f32 {
-    if x > acc {
         x
     } else {
         acc
@@ -258,7 +267,8 @@ impl Builder {
         }
     }
 
-    /// Adds the record `r` to its bin on every axis that is binned (`scale` > 0).
+    /// Adds the record `r` to its bin on every axis. (An axis that is not binned, `scale` 0,
+    /// has every record in bin 0: no branch, and the sweep passes it by.)
     #[inline(always)]
     fn bin_into<const N: usize>(
         bins: &mut SahBins<N>,
@@ -266,10 +276,9 @@ impl Builder {
         cmin: &[f32; N],
         scale: &[f32; N],
     ) {
+        let at: [usize; N] = std::array::from_fn(|a| bin_of(r.centre2(a), cmin[a], scale[a]));
         for a in 0..N {
-            if scale[a] > 0.0 {
-                bins[a][bin_of(r.centre2(a), cmin[a], scale[a])].grow(&r.lo, &r.hi, 1);
-            }
+            bins[a][at[a]].grow(&r.b, 1);
         }
     }
 
@@ -325,14 +334,14 @@ impl Builder {
         }
         let mut scale = [0.0f32; N];
         for a in 0..N {
-            let ext = info.cmax[a] - info.cmin[a];
+            let ext = info.centre_extent(a);
             let s = BINS as f32 / ext;
             if ext > 0.0 && s.is_finite() {
                 scale[a] = s;
             }
         }
         if depth < MAX_SAH_DEPTH && scale.iter().any(|&s| s > 0.0) {
-            let bins = self.bins(refs, &info.cmin, &scale);
+            let bins = self.bins(refs, &info.c[0], &scale);
             // (cost, axis, first bin of the right side); ties keep the first candidate.
             let mut best: Option<(f64, usize, usize)> = None;
             for a in 0..N {
@@ -350,7 +359,7 @@ impl Builder {
                         right_cost[s] = right_cost[s + 1];
                         continue;
                     }
-                    acc.grow(&b.min, &b.max, b.count);
+                    acc.grow(&b.b, b.count);
                     right_cost[s] = acc.half_area() * blocks_of(acc.count);
                 }
                 let mut left = SahBin::EMPTY;
@@ -360,7 +369,7 @@ impl Builder {
                     if b.count == 0 {
                         continue;
                     }
-                    left.grow(&b.min, &b.max, b.count);
+                    left.grow(&b.b, b.count);
                     let n_left = left.count as usize;
                     if n_left == 0 || n_left == n {
                         continue;
@@ -372,7 +381,7 @@ impl Builder {
                 }
             }
             if let Some((_, a, s)) = best {
-                let (cmin, sc) = (info.cmin[a], scale[a]);
+                let (cmin, sc) = (info.c[0][a], scale[a]);
                 let mid = partition(refs, |r| bin_of(r.centre2(a), cmin, sc) < s);
                 debug_assert!(mid > 0 && mid < n);
                 let (left, right) = bins[a].split_at(s);
@@ -383,7 +392,7 @@ impl Builder {
         // input index), which always splits and halves the count.
         let mut axis = 0;
         for a in 1..N {
-            if info.cmax[a] - info.cmin[a] > info.cmax[axis] - info.cmin[axis] {
+            if info.centre_extent(a) > info.centre_extent(axis) {
                 axis = a;
             }
         }
@@ -399,8 +408,8 @@ impl Builder {
 
     fn node<const N: usize>(info: &NodeBounds<N>) -> BinaryNode<N> {
         BinaryNode {
-            min: info.bmin,
-            max: info.bmax,
+            min: info.b[0],
+            max: upper(&info.b),
             first: 0,
             count: 0,
         }
@@ -550,7 +559,7 @@ impl<const N: usize> Bvh<N> {
         let exact = ExactSource::new(move |id| by_id[&id]);
         let refs = refs_of(&bounds);
         drop(bounds);
-        let fill = (|i, _| prims[i], |_, _| ());
+        let fill = (|i, _| prims[i], |i, _| Lane::of(&prims[i]), |_, _, _| ());
         Self::build_from(ids, refs, Vec::new(), fill, exact, par_min)
     }
 
@@ -593,38 +602,44 @@ impl<const N: usize> Bvh<N> {
         );
         let refs = refs_of(&bounds);
         drop(bounds);
-        let fill = (|_, id| prepare(id), |_, _| ());
+        let fill = (
+            |_, id| prepare(id),
+            |_, id| Lane::of(&prepare(id)),
+            |_, _, _| (),
+        );
         Self::build_from(ids, refs, cells, fill, exact, PAR_MIN)
     }
 
     /// [`Bvh::build_lazily_with_cells`] over the build records of the simplices (`refs[i]`
-    /// input i's, with id i), with a `prepare` that may borrow and a `warm` as `build_from`
-    /// takes it: the tree has no exact source until [`Bvh::set_exact`] gives it one (the
-    /// scene's, once its objects are shared).
+    /// input i's, with id i), with a `prepare`, `lane` and `warm` as `build_from` takes them,
+    /// which may borrow: the tree has no exact source until [`Bvh::set_exact`] gives it one
+    /// (the scene's, once its objects are shared).
     pub(crate) fn build_with_cells_borrowing(
         ids: Vec<u32>,
         refs: Vec<Ref<N>>,
         cells: Vec<FlatCell<N>>,
-        (prepare, warm): (
-            impl Fn(u32) -> PreparedSimplex<N> + Sync,
-            impl Fn(u32, bool) + Sync,
+        fill: (
+            impl Fn(usize, u32) -> PreparedSimplex<N> + Sync,
+            impl Fn(usize, u32) -> Lane<N> + Sync,
+            impl Fn(usize, u32, bool) + Sync,
         ),
     ) -> Self {
-        let fill = (|_, id| prepare(id), warm);
         Self::build_from(ids, refs, cells, fill, ExactSource::none(), PAR_MIN)
     }
 
     /// The build over `ids` and their records `refs` (`refs[i]` input i's, with id i) with
-    /// the flat `cells`; `prepare(i, ids[i])` gives input i's prepared simplex, and
-    /// `warm(ids[i], near)` may ask for what it reads ahead of the call (`near`: the
-    /// simplex's reference was asked for before; see `wide_tree`).
+    /// the flat `cells`. `prepare(i, ids[i])` gives input i's prepared simplex (for the
+    /// cells), `lane(i, ids[i])` what its block lane holds (the lane of that prepared simplex),
+    /// and `warm(i, ids[i], near)` may ask for what `lane` reads ahead of the call (`near`:
+    /// the simplex's reference was asked for before; see `wide_tree`).
     fn build_from(
         ids: Vec<u32>,
         refs: Vec<Ref<N>>,
         cells: Vec<FlatCell<N>>,
-        (prepare, warm): (
+        (prepare, lane, warm): (
             impl Fn(usize, u32) -> PreparedSimplex<N> + Sync,
-            impl Fn(u32, bool) + Sync,
+            impl Fn(usize, u32) -> Lane<N> + Sync,
+            impl Fn(usize, u32, bool) + Sync,
         ),
         exact: ExactSource<N>,
         par_min: usize,
@@ -713,7 +728,7 @@ impl<const N: usize> Bvh<N> {
         let reach = (0..N)
             .map(|i| f64::from(root.min[i].abs()).max(f64::from(root.max[i].abs())))
             .fold(0.0, f64::max);
-        let fill = (|i| prepare(i, ids[i]), |i, near| warm(ids[i], near));
+        let fill = (|i| lane(i, ids[i]), |i, near| warm(i, ids[i], near));
         let tree = wide_tree(bin, &order, fill, &ids, &cells);
         drop((ids, order));
         // Non-finite bounds only widen the slab test (and the shift saturates to infinity).

@@ -4,7 +4,7 @@
 use super::cell::{Cell, CellGeometry};
 use super::simplex::PreparedSimplex;
 use super::tree::{
-    half_area, BinaryNode, LeafBlock, WideNode, BLOCK_WIDTH, CELL_TAG, EMPTY_SLOT, LEAF_TAG,
+    half_area, BinaryNode, Lane, LeafBlock, WideNode, BLOCK_WIDTH, CELL_TAG, EMPTY_SLOT, LEAF_TAG,
     NODE_WIDTH,
 };
 
@@ -305,17 +305,16 @@ pub(super) struct WideTree<const N: usize> {
 }
 
 /// The wide tree over the binary tree `bin` with leaf order `order` (input indices, and
-/// `CELL_MARK | c` for the flat cells `cells`), laid out by the [`CollapsePlan`]; `prepare(i)`
-/// and `ids[i]` are the input simplices, and `warm(i, near)` asks for what `prepare(i)` reads
+/// `CELL_MARK | c` for the flat cells `cells`), laid out by the [`CollapsePlan`]; `lane(i)`
+/// and `ids[i]` are the input simplices, and `warm(i, near)` asks for what `lane(i)` reads
 /// (`near`: after its reference). The binary tree and the plan are dropped once the
-/// layout is known, before the blocks are made; their simplices are then prepared in
-/// parallel, so that neither the binary tree nor a list of prepared simplices is alive beside
-/// the blocks.
+/// layout is known, before the blocks are made; the blocks are then filled in parallel, so
+/// that the binary tree is not alive beside them.
 pub(super) fn wide_tree<const N: usize>(
     bin: Vec<BinaryNode<N>>,
     order: &[u32],
-    (prepare, warm): (
-        impl Fn(usize) -> PreparedSimplex<N> + Sync,
+    (lane, warm): (
+        impl Fn(usize) -> Lane<N> + Sync,
         impl Fn(usize, bool) + Sync,
     ),
     ids: &[u32],
@@ -377,7 +376,7 @@ pub(super) fn wide_tree<const N: usize>(
                     }
                     for l in 0..count {
                         let i = order[first + l] as usize;
-                        block.set_lane(l, &prepare(i), ids[i]);
+                        block.set_lane(l, &lane(i), ids[i]);
                     }
                 }
                 Pending::Cell { cell, chunk } => {
@@ -385,7 +384,7 @@ pub(super) fn wide_tree<const N: usize>(
                     let at = chunk as usize * BLOCK_WIDTH..;
                     let (members, prepared) = (&members[at.clone()], &geometry.prepared[at]);
                     for (l, (&i, p)) in members.iter().zip(prepared).take(BLOCK_WIDTH).enumerate() {
-                        block.set_lane(l, p, ids[i as usize]);
+                        block.set_lane(l, &Lane::of(p), ids[i as usize]);
                     }
                 }
             }

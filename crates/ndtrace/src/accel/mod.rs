@@ -43,7 +43,10 @@
 //! centroid bounds at the root (below a binned split, over twice the node's box, which its bins
 //! give without another pass over its simplices), leaves of at most [`MAX_LEAF`] simplices,
 //! object-median splits when SAH cannot split or the tree gets deep. The build is parallel
-//! (rayon) for large inputs and produces the same tree for any number of threads.
+//! (rayon) for large inputs and produces the same tree for any number of threads. It partitions
+//! records of f32 boxes in place, each held as `[lo, −hi]` so that the union of two boxes is
+//! one packed minimum. A scene prepares each simplex once, in simplex order (its box and its
+//! lane's f32 rows), and its blocks are filled from those rows.
 //!
 //! Very large inputs (the scene build switches at [`MORTON_MIN`] simplices) skip the SAH and the
 //! collapse: [`Bvh::build_morton`] sorts the simplices along a Morton curve, packs runs of 4
@@ -136,4 +139,5 @@ pub use packet::PACKET;
 pub use simplex::{simplex_bounds, Bounds, PreparedSimplex, BARY_SLACK, PLANE_ROUNDING};
 #[cfg(feature = "traversal-stats")]
 pub use stats::traversal_stats;
+pub(crate) use tree::Lane;
 pub use tree::{Bvh, ExactSource, MAX_LEAF};

@@ -26,7 +26,8 @@
 use super::build::BOX_PAD;
 use super::simplex::{simplex_bounds, Bounds, PreparedSimplex};
 use super::tree::{
-    f32_down, f32_up, Bvh, ExactSource, LeafBlock, WideNode, BLOCK_WIDTH, LEAF_TAG, NODE_WIDTH,
+    f32_down, f32_up, Bvh, ExactSource, Lane, LeafBlock, WideNode, BLOCK_WIDTH, LEAF_TAG,
+    NODE_WIDTH,
 };
 use crate::linalg::Vector;
 use rayon::prelude::*;
@@ -397,7 +398,7 @@ impl<const N: usize> Bvh<N> {
                     let Some(p) = PreparedSimplex::new(&simplex(id as usize)) else {
                         continue;
                     };
-                    block.set_lane(l, &p, id_of(id as usize));
+                    block.set_lane(l, &Lane::of(&p), id_of(id as usize));
                     l += 1;
                 }
                 block

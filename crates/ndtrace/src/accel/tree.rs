@@ -106,6 +106,31 @@ pub(super) fn f32_up(x: f64) -> f32 {
     f32::from_bits(bits.wrapping_add(step).wrapping_sub(2 * (step & neg)))
 }
 
+/// What a block's lane holds of a prepared simplex: its rows rounded to f32, and its first
+/// vertex `x_0`.
+#[derive(Clone, Copy)]
+pub(crate) struct Lane<const N: usize> {
+    pub(crate) rows: [[f32; N]; N],
+    pub(crate) x0: [f64; N],
+}
+
+impl<const N: usize> Lane<N> {
+    /// The rows of `p` rounded to f32.
+    #[inline]
+    pub(crate) fn rows_of(p: &super::PreparedSimplex<N>) -> [[f32; N]; N] {
+        p.m.map(|row| row.map(|x| x as f32))
+    }
+
+    /// The lane of `p`.
+    #[inline]
+    pub(crate) fn of(p: &super::PreparedSimplex<N>) -> Self {
+        Lane {
+            rows: Self::rows_of(p),
+            x0: p.x0,
+        }
+    }
+}
+
 /// Result of a block test: bit mask of the lanes hit, and per lane t, `n̂·d` and
 /// `u[k][lane] = (n̂·d)·t_k` (k ≥ 1), meaningful for the lanes hit.
 pub(super) struct BlockHits<const N: usize> {
@@ -133,16 +158,16 @@ impl<const N: usize> LeafBlock<N> {
         ids: [EMPTY_SLOT; BLOCK_WIDTH],
     };
 
-    /// Stores the prepared simplex `p` with id `id` in lane `l` (its rows rounded to f32).
+    /// Stores the simplex `lane` with id `id` in lane `l`.
     #[inline]
-    pub(super) fn set_lane(&mut self, l: usize, p: &super::PreparedSimplex<N>, id: u32) {
+    pub(super) fn set_lane(&mut self, l: usize, lane: &Lane<N>, id: u32) {
         for k in 0..N {
             for i in 0..N {
-                self.m[k][i][l] = p.m[k][i] as f32;
+                self.m[k][i][l] = lane.rows[k][i];
             }
         }
         for i in 0..N {
-            self.x0[i][l] = p.x0[i];
+            self.x0[i][l] = lane.x0[i];
         }
         self.ids[l] = id;
     }

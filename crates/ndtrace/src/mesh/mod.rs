@@ -38,5 +38,6 @@ pub(crate) fn find(parent: &mut [u32], mut x: u32) -> u32 {
 
 pub mod elevation;
 pub mod features;
+mod filing;
 pub mod flat;
 pub use features::feature_edges;

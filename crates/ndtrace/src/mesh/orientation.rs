@@ -15,6 +15,7 @@
 //! is closed, or as close to the given orientation as possible where it has a boundary.
 //! Simplices with a repeated vertex index have no orientation and are left out of both.
 
+use super::filing::{file_ridges, Filed, RidgeEntry};
 use super::Mesh;
 use crate::geometry::simplex_normal;
 use crate::linalg::{add, dot, scale, sub};
@@ -109,75 +110,105 @@ impl std::fmt::Display for OrientError {
 /// Matches the simplices of `mesh` along their ridges, in time O(S·N²) for meshes whose
 /// vertices each lie in a bounded number of simplices.
 ///
-/// Each ridge is filed under its smallest vertex index by a counting sort (a stable,
-/// sequential pass: no comparison sort over all S·N ridges); the ridges filed under one vertex
-/// are then matched by their sorted vertices, in parallel over runs of vertices. When a ridge
-/// belongs to more than two simplices, the error names the first such ridge in the order of
-/// the ridges' sorted vertices.
+/// Each ridge is filed under its smallest vertex index by a counting sort (stable and
+/// parallel: no comparison sort over all S·N ridges); the ridges filed under one vertex are
+/// then matched by their sorted vertices, in parallel over runs of vertices. When a ridge belongs to more than two simplices, the error names the first such
+/// ridge in the order of the ridges' sorted vertices.
 pub fn ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
     matched_ridges(mesh).map(Ridges::sorted)
 }
 
 /// [`ridges`] before `pairs` and `boundary` are sorted (they come in the order of the ridges'
-/// smallest vertices): for the callers that only ask whether every ridge is shared, or every
-/// pair agrees, and so need no sort of S·N/2 pairs.
+/// smallest vertices): for the callers that only ask whether every pair agrees, and so need
+/// no sort of S·N/2 pairs.
 pub(crate) fn matched_ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
+    fn matched<const N: usize, T: RidgeEntry>(mesh: &Mesh<N>) -> Result<Ridges, OrientError> {
+        let (filed, degenerate) = file(mesh);
+        lists::<N, T>(mesh, &filed, degenerate)
+    }
+    match entries_fit_u32(mesh) {
+        true => matched::<N, u32>(mesh),
+        false => matched::<N, u64>(mesh),
+    }
+}
+
+/// Whether every entry `simplex·N + slot` of the filed ridges fits in a u32.
+fn entries_fit_u32<const N: usize>(mesh: &Mesh<N>) -> bool {
+    u32::try_from(mesh.simplices.len() * N).is_ok()
+}
+
+/// The ridges of `mesh` filed under their smallest vertex ([`file_ridges`]), and the simplices
+/// left out of them because a vertex index repeats in them.
+fn file<const N: usize, T: RidgeEntry>(mesh: &Mesh<N>) -> (Filed<T>, Vec<u32>) {
     let s = &mesh.simplices;
     let repeated = |idx: &[u32; N]| (1..N).any(|a| idx[..a].contains(&idx[a]));
     let degenerate: Vec<u32> = (0..s.len() as u32)
         .filter(|&i| repeated(&s[i as usize]))
         .collect();
-    // The smallest vertex of the ridge opposite slot k.
-    let low = |idx: &[u32; N], k: usize| {
-        (0..N)
-            .filter(|&j| j != k)
-            .map(|j| idx[j])
-            .min()
-            .unwrap_or(0)
-    };
     let buckets = s.par_iter().flatten().max().map_or(0, |&m| m as usize + 1);
-    // start[v]..start[v + 1]: the ridges filed under vertex v, as simplex·N + omitted slot in
-    // increasing order. One sequential pass: a parallel sort of runs of simplices (tried) was
-    // barely faster and left its buffers in the allocator's per-thread arenas, beside the BVH
-    // that is built next.
-    let mut start = vec![0usize; buckets + 1];
-    for idx in s.iter().filter(|idx| !repeated(idx)) {
-        for k in 0..N {
-            start[low(idx, k) as usize + 1] += 1;
-        }
+    (file_ridges(s, buckets, |idx| !repeated(idx)), degenerate)
+}
+
+/// The matched ridges as lists, from the `filed` ridges of `mesh` and its `degenerate`
+/// simplices.
+fn lists<const N: usize, T: RidgeEntry>(
+    mesh: &Mesh<N>,
+    filed: &Filed<T>,
+    degenerate: Vec<u32>,
+) -> Result<Ridges, OrientError> {
+    let new = || (Vec::new(), Vec::new());
+    let add = |(pairs, boundary): &mut (Vec<_>, Vec<_>), m: Shared| match m {
+        Shared::Pair(a, b, agree) => pairs.push((a, b, agree)),
+        Shared::Boundary(a) => boundary.push(a),
+    };
+    let (mut pairs, mut boundary) = (Vec::new(), Vec::new());
+    for (p, b) in match_filed(mesh, filed, new, add)? {
+        pairs.extend(p);
+        boundary.extend(b);
     }
-    for v in 0..buckets {
-        start[v + 1] += start[v];
-    }
-    let mut filed = vec![0u64; start[buckets]];
-    for (i, idx) in s.iter().enumerate().filter(|(_, idx)| !repeated(idx)) {
-        for k in 0..N {
-            let v = low(idx, k) as usize;
-            filed[start[v]] = (i * N + k) as u64;
-            start[v] += 1;
-        }
-    }
-    // Each start[v] has moved to the start of v + 1: one place back to the right.
-    start.rotate_right(1);
-    start[0] = 0;
+    Ok(Ridges {
+        pairs,
+        boundary,
+        degenerate,
+    })
+}
+
+/// How one ridge is shared: by two simplices (a < b, and whether they agree on it) or by one.
+enum Shared {
+    Pair(u32, u32, bool),
+    Boundary(u32),
+}
+
+/// Matches the simplices of `mesh` along their `filed` ridges (see [`ridges`]), handing each
+/// ridge to the accumulator of its run of vertices (`new` makes one, `add` adds to it).
+/// Returns the accumulators in the order of their runs, so in the order of the ridges'
+/// smallest vertices.
+fn match_filed<const N: usize, T: RidgeEntry, A: Send>(
+    mesh: &Mesh<N>,
+    Filed { start, entries }: &Filed<T>,
+    new: impl Fn() -> A + Sync,
+    add: impl Fn(&mut A, Shared) + Sync,
+) -> Result<Vec<A>, OrientError> {
+    let s = &mesh.simplices;
+    let buckets = start.len() - 1;
     // Runs of whole buckets of about equal size, matched in parallel and joined in order.
     let pieces = rayon::current_num_threads() * 8;
     let mut cuts = vec![0usize];
     for k in 1..pieces {
-        let want = filed.len() * k / pieces;
+        let want = entries.len() * k / pieces;
         let v = start.partition_point(|&x| x < want).min(buckets);
         cuts.push(v.max(*cuts.last().unwrap_or(&0)));
     }
     cuts.push(buckets);
-    type Matched = (Vec<(u32, u32, bool)>, Vec<u32>);
-    let matched: Vec<Result<Matched, OrientError>> = cuts
+    let matched: Vec<Result<A, OrientError>> = cuts
         .par_windows(2)
         .map(|w| {
-            let (mut pairs, mut boundary) = (vec![], vec![]);
+            let mut acc = new();
             let mut run: Vec<([u32; N], bool, u32)> = vec![];
             for v in w[0]..w[1] {
                 run.clear();
-                run.extend(filed[start[v]..start[v + 1]].iter().map(|&r| {
+                run.extend(entries[start[v]..start[v + 1]].iter().map(|&r| {
+                    let r: u64 = r.into();
                     let (simplex, slot) = ((r / N as u64) as usize, (r % N as u64) as usize);
                     let (_, key, odd) = ridge(&s[simplex], slot);
                     (key, odd, simplex as u32)
@@ -185,10 +216,11 @@ pub(crate) fn matched_ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, O
                 run.sort_unstable();
                 for same in run.chunk_by(|a, b| a.0 == b.0) {
                     match same {
-                        [(_, _, a)] => boundary.push(*a),
-                        [(_, odd_a, a), (_, odd_b, b)] => {
-                            pairs.push(((*a).min(*b), (*a).max(*b), odd_a != odd_b))
-                        }
+                        [(_, _, a)] => add(&mut acc, Shared::Boundary(*a)),
+                        [(_, odd_a, a), (_, odd_b, b)] => add(
+                            &mut acc,
+                            Shared::Pair((*a).min(*b), (*a).max(*b), odd_a != odd_b),
+                        ),
                         more => {
                             return Err(OrientError::NonManifold {
                                 ridge: more[0].0[..N - 1].to_vec(),
@@ -198,21 +230,10 @@ pub(crate) fn matched_ridges<const N: usize>(mesh: &Mesh<N>) -> Result<Ridges, O
                     }
                 }
             }
-            Ok((pairs, boundary))
+            Ok(acc)
         })
         .collect();
-    drop(filed);
-    let (mut pairs, mut boundary) = (vec![], vec![]);
-    for m in matched {
-        let (p, b) = m?;
-        pairs.extend(p);
-        boundary.extend(b);
-    }
-    Ok(Ridges {
-        pairs,
-        boundary,
-        degenerate,
-    })
+    matched.into_iter().collect()
 }
 
 /// One connected piece of a mesh (simplices linked through shared ridges), as [`orient`] found
@@ -261,10 +282,12 @@ impl Repair {
 /// positive) and a piece with a boundary keeps the orientation of the majority of its
 /// simplices. Already consistent, outward pieces are left unchanged.
 pub fn orient<const N: usize>(mesh: &Mesh<N>) -> Result<Repair, OrientError> {
-    orient_along(mesh, &ridges(mesh)?)
+    orient_along(mesh, &matched_ridges(mesh)?)
 }
 
-/// [`orient`] with the mesh's ridges `r` already matched.
+/// [`orient`] with the mesh's ridges `r` already matched, in any order: the walk meets a
+/// piece's simplices in an order that depends on it, but their flips do not (each is fixed by
+/// the piece's first simplex, and a contradiction fails the piece whatever the order).
 fn orient_along<const N: usize>(mesh: &Mesh<N>, r: &Ridges) -> Result<Repair, OrientError> {
     let count = mesh.simplices.len();
     // Neighbour lists (compressed rows), with whether the pair agrees.
@@ -375,13 +398,31 @@ fn enclosed_volume<const N: usize>(mesh: &Mesh<N>, members: &[usize], flip: &[bo
 /// pieces that [`orient`] flips (those facing inward); `None` for an open or consistent mesh.
 /// A closed mesh that cannot be oriented gives `Some((0, simplices))`.
 pub fn inconsistency<const N: usize>(mesh: &Mesh<N>) -> Option<(usize, usize)> {
-    // Unsorted first: a closed, consistently oriented mesh needs no more.
-    let r = matched_ridges(mesh).ok()?;
-    if !r.closed() || r.consistent() {
+    match entries_fit_u32(mesh) {
+        true => inconsistency_of::<N, u32>(mesh),
+        false => inconsistency_of::<N, u64>(mesh),
+    }
+}
+
+/// [`inconsistency`] with the filed ridges held as `T`.
+fn inconsistency_of<const N: usize, T: RidgeEntry>(mesh: &Mesh<N>) -> Option<(usize, usize)> {
+    let (filed, degenerate) = file::<N, T>(mesh);
+    // Counts first, without the lists of pairs: a closed, consistently oriented mesh needs no
+    // more.
+    let tally = || (0usize, true);
+    let add = |(boundary, agree): &mut (usize, bool), m: Shared| match m {
+        Shared::Pair(_, _, a) => *agree &= a,
+        Shared::Boundary(_) => *boundary += 1,
+    };
+    let runs = match_filed(mesh, &filed, tally, add).ok()?;
+    let closed = degenerate.is_empty() && runs.iter().all(|r| r.0 == 0);
+    if !closed || runs.iter().all(|r| r.1) {
         return None;
     }
+    let ridges = lists(mesh, &filed, degenerate).ok()?;
+    drop(filed);
     let count = mesh.simplices.len();
-    match orient_along(mesh, &r.sorted()) {
+    match orient_along(mesh, &ridges) {
         Ok(repair) => Some((
             repair
                 .pieces
@@ -548,6 +589,15 @@ mod tests {
                     m.simplices.swap(i, r.random_range(0..=i));
                 }
                 meshes.push(m);
+                // Closed, some simplices flipped: what the load-time check flags.
+                let mut flipped = base.clone();
+                flipped.simplices[0].swap(0, 1);
+                for idx in &mut flipped.simplices {
+                    if r.random_bool(0.3) {
+                        idx.swap(0, 1);
+                    }
+                }
+                meshes.push(flipped);
             }
             for soup in 0..40 {
                 // N distinct vertices of few, in random order, one in ten with a repeat.
@@ -570,7 +620,7 @@ mod tests {
                     simplices,
                 });
             }
-            let mut errors = 0;
+            let (mut errors, mut flags) = (0, 0);
             for (k, m) in meshes.iter().enumerate() {
                 let want = brute_force_ridges(m);
                 errors += usize::from(want.is_err());
@@ -582,10 +632,33 @@ mod tests {
                         .unwrap();
                     let got = pool.install(|| ridges(m));
                     assert_eq!(got, want, "N = {N}, mesh {k}, {threads} threads");
+                    // The load-time check counts what the lists hold.
+                    let flagged = want.as_ref().is_ok_and(|r| r.closed() && !r.consistent());
+                    let check = pool.install(|| inconsistency(m));
+                    assert_eq!(
+                        check.is_some(),
+                        flagged,
+                        "N = {N}, mesh {k}, {threads} threads"
+                    );
+                    flags += usize::from(flagged);
+                }
+                // The repair does not depend on the order of the pairs.
+                if let Ok(want) = &want {
+                    let mut shuffled = want.clone();
+                    for i in (1..shuffled.pairs.len()).rev() {
+                        shuffled.pairs.swap(i, r.random_range(0..=i));
+                    }
+                    shuffled.boundary.reverse();
+                    assert_eq!(
+                        orient_along(m, &shuffled),
+                        orient_along(m, want),
+                        "N = {N}, mesh {k}"
+                    );
                 }
             }
             // The soups do meet non-manifold ridges, and the others do not.
             assert!(errors > 0 && errors < meshes.len(), "N = {N}: {errors}");
+            assert!(flags > 0, "N = {N}: no closed mesh was inconsistent");
         }
         for_each_dim!(check);
     }

@@ -9,7 +9,7 @@ use super::fields::{coefficient, matrix_rows, mesh_from_rows, rgb, vec_n, R};
 use super::mesh_file::{orientation_warning, read_mesh, MeshReader};
 use super::transform::transform;
 use crate::accel::{
-    prefetch_of, simplex_bounds, Bounds, BuildRef, Bvh, ExactSource, FlatCell, Instances,
+    prefetch_of, simplex_bounds, Bounds, BuildRef, Bvh, ExactSource, FlatCell, Instances, Lane,
     PreparedSimplex, ToObject, MORTON_MIN,
 };
 use crate::camera::{look_at_orientation, Camera};
@@ -991,11 +991,20 @@ fn world_boxes<const N: usize>(objects: &[Object<N>]) -> Vec<Bounds<N>> {
 /// The diagonal of the box of the simplices the BVH holds (`slots` not `u32::MAX`) and of the
 /// surfaces' vertices (it sets their shadow rays' offset); min and max are exact in any order.
 fn extent_of<const N: usize>(objects: &[Object<N>], offsets: &[u32], slots: &[u32]) -> f64 {
-    let (mut lo, mut hi) = (0..slots.len())
-        .into_par_iter()
-        .filter(|&g| slots[g] != u32::MAX)
-        .map(|g| simplex_bounds(&simplex_at(objects, offsets, g)))
-        .reduce(empty_box, merge_boxes);
+    let kept = |(o, &off): (&Object<N>, &u32)| {
+        let slots = &slots[off as usize..][..o.mesh.simplices.len()];
+        (0..slots.len())
+            .into_par_iter()
+            .filter(|&s| slots[s] != u32::MAX)
+            .map(|s| {
+                warm_vertices(&o.mesh, s + AHEAD);
+                simplex_bounds(&o.mesh.simplex_points(s))
+            })
+            .reduce(empty_box, merge_boxes)
+    };
+    let (mut lo, mut hi) = (objects.iter().zip(offsets))
+        .map(kept)
+        .fold(empty_box(), merge_boxes);
     for o in objects.iter().filter(|o| o.surface.is_some()) {
         for v in &o.mesh.vertices {
             for k in 0..N {
@@ -1432,11 +1441,14 @@ fn sah_bvh<const N: usize>(
     shadows: bool,
 ) -> Bvh<N> {
     // Each simplex's build record (holding, for now, its global id, or `DROPPED` for a
-    // degenerate simplex) and, for the convexity certificates, its normal, in one parallel
-    // pass in simplex order; the prepared simplices themselves are made again where the BVH's
-    // blocks are filled, so that no list of them is alive beside the blocks.
+    // degenerate simplex), the rows its block lane will hold and, for the convexity
+    // certificates, its normal, in one parallel pass in simplex order, so that the fill does
+    // not prepare the simplices again. (The rows, N² f32 per simplex, are alive until the
+    // blocks are filled; a lane's other part, the simplex's first vertex, is read from the
+    // mesh.)
     const DROPPED: u32 = u32::MAX;
     let mut refs: Vec<BuildRef<N>> = Vec::new();
+    let mut rows: Vec<[[f32; N]; N]> = Vec::new();
     let mut cells = Vec::new();
     let mut dropped = 0;
     for &k in members {
@@ -1450,28 +1462,29 @@ fn sah_bvh<const N: usize>(
         let search = d.shape == ShapeKind::Hypercube
             || (d.shape == ShapeKind::Mesh && o.mesh.simplices.len() <= MAX_FLAT_SEARCH);
         let count = o.mesh.simplices.len();
-        let record = |s: usize| {
+        let record = |s: usize, r: &mut BuildRef<N>, row: &mut [[f32; N]; N]| {
+            // (The pass runs over increasing s in each task.)
+            warm_vertices(&o.mesh, s + AHEAD);
             let pts = o.mesh.simplex_points(s);
             let p = PreparedSimplex::new(&pts)?;
-            Some((
-                BuildRef::new(off + s as u32, &simplex_bounds(&pts)),
-                p.normal(),
-            ))
+            *r = BuildRef::new(off + s as u32, &simplex_bounds(&pts));
+            *row = Lane::rows_of(&p);
+            Some(p)
         };
         let none = BuildRef::new(DROPPED, &([0.0; N], [0.0; N]));
         let mut mine = vec![none; count];
+        let mut my_rows = vec![[[0.0; N]; N]; count];
         let mut normals = vec![[0.0; N]; if certify { count } else { 0 }];
+        let records = mine.par_iter_mut().zip(&mut my_rows).enumerate();
         if certify {
-            (mine.par_iter_mut().zip(&mut normals).enumerate()).for_each(|(s, (r, n))| {
-                if let Some((rec, normal)) = record(s) {
-                    (*r, *n) = (rec, normal);
+            records.zip(&mut normals).for_each(|((s, (r, row)), n)| {
+                if let Some(p) = record(s, r, row) {
+                    *n = p.normal();
                 }
             });
         } else {
-            (mine.par_iter_mut().enumerate()).for_each(|(s, r)| {
-                if let Some((rec, _)) = record(s) {
-                    *r = rec;
-                }
+            records.for_each(|(s, (r, row))| {
+                record(s, r, row);
             });
         }
         dropped += mine.par_iter().filter(|r| r.id == DROPPED).count();
@@ -1491,12 +1504,20 @@ fn sah_bvh<const N: usize>(
             }
         }
         if refs.is_empty() {
-            refs = mine;
+            (refs, rows) = (mine, my_rows);
         } else {
             refs.extend_from_slice(&mine);
+            rows.extend_from_slice(&my_rows);
         }
     }
     if dropped > 0 {
+        // `retain` visits the elements in order, once each.
+        let mut kept = refs
+            .iter()
+            .map(|r| r.id != DROPPED)
+            .collect::<Vec<_>>()
+            .into_iter();
+        rows.retain(|_| kept.next() == Some(true));
         refs.retain(|r| r.id != DROPPED);
     }
     // The global ids, and the records numbered as the build's inputs.
@@ -1522,23 +1543,49 @@ fn sah_bvh<const N: usize>(
             FlatCell { members, points }
         })
         .collect();
-    let prepare = |g: u32| {
+    let prepare = |_, g: u32| {
         PreparedSimplex::new(&simplex_at(objects, offsets, g as usize))
             .expect("a simplex prepared once prepares again")
     };
-    // What `prepare(g)` will read: the simplex's vertex indices, then (`near`) its vertices.
-    let warm = |g: u32, near: bool| {
+    // The first vertex of global simplex g, and what it is read through.
+    let first = |g: u32| {
         let o = offsets.partition_point(|&off| off <= g) - 1;
         let mesh = &objects[o].mesh;
-        let idx = &mesh.simplices[(g - offsets[o]) as usize];
-        if near {
-            idx.iter()
-                .for_each(|&v| prefetch_of(&mesh.vertices[v as usize]));
-        } else {
-            prefetch_of(idx);
+        (mesh, &mesh.simplices[(g - offsets[o]) as usize])
+    };
+    let lane = |i: usize, g: u32| {
+        let (mesh, idx) = first(g);
+        Lane {
+            rows: rows[i],
+            x0: mesh.vertices[idx[0] as usize],
         }
     };
-    Bvh::build_with_cells_borrowing(ids, refs, cells, (prepare, warm))
+    // What `lane(i, g)` will read: the rows and the simplex's vertex indices, then (`near`)
+    // its first vertex.
+    let warm = |i: usize, g: u32, near: bool| {
+        let (mesh, idx) = first(g);
+        if near {
+            prefetch_of(&mesh.vertices[idx[0] as usize]);
+        } else {
+            prefetch_of(idx);
+            prefetch_of(&rows[i]);
+        }
+    };
+    Bvh::build_with_cells_borrowing(ids, refs, cells, (prepare, lane, warm))
+}
+
+/// How many simplices ahead the passes over a mesh in simplex order ask for their vertices
+/// ([`warm_vertices`]).
+const AHEAD: usize = 8;
+
+/// Asks for the vertices of simplex `s` of `mesh` (if there is one) ahead of their use: in a
+/// large mesh they lie anywhere, and a pass over its simplices would wait for each in turn.
+fn warm_vertices<const N: usize>(mesh: &Mesh<N>, s: usize) {
+    for &v in mesh.simplices.get(s).into_iter().flatten() {
+        if let Some(x) = mesh.vertices.get(v as usize) {
+            prefetch_of(x);
+        }
+    }
 }
 
 /// Fewest simplices an object with a transform needs to be traced in its own space, in a tree
