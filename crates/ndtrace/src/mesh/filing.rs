@@ -40,7 +40,7 @@ const MAX_RUNS: usize = 4;
 /// The smallest vertex of the ridge opposite each slot of a simplex without a repeated vertex:
 /// its second smallest vertex for the slot of its smallest, else its smallest.
 #[inline(always)]
-pub(crate) fn lows<const N: usize>(idx: &[u32; N]) -> [u32; N] {
+fn lows<const N: usize>(idx: &[u32; N]) -> [u32; N] {
     let (mut first, mut second) = (u32::MAX, u32::MAX);
     for &v in idx {
         if v < first {

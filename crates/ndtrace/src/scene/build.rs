@@ -1511,13 +1511,12 @@ fn sah_bvh<const N: usize>(
         }
     }
     if dropped > 0 {
-        // `retain` visits the elements in order, once each.
-        let mut kept = refs
-            .iter()
-            .map(|r| r.id != DROPPED)
-            .collect::<Vec<_>>()
-            .into_iter();
-        rows.retain(|_| kept.next() == Some(true));
+        // `retain` visits the elements in order, once each: row k goes with record k.
+        let mut k = 0;
+        rows.retain(|_| {
+            k += 1;
+            refs[k - 1].id != DROPPED
+        });
         refs.retain(|r| r.id != DROPPED);
     }
     // The global ids, and the records numbered as the build's inputs.
