@@ -5,9 +5,10 @@
 //! them.
 
 use crate::errors::{guarded, to_py_err};
+use ndtrace::camera::Projection;
 use ndtrace::composite::{
-    self as core, CompositeMode, CompositeOptions, Projection, RetinaCamera, RetinaEdge,
-    RetinaExtras, MAX_RETINA_DIM,
+    self as core, CompositeMode, CompositeOptions, RetinaCamera, RetinaEdge, RetinaExtras,
+    MAX_RETINA_DIM,
 };
 use ndtrace::scene::{self, PathError};
 use ndtrace::{names, NdError};

@@ -127,7 +127,7 @@ impl CompiledScene {
             d.set_item("cell", c.cell)?;
             d.set_item(
                 "perspective",
-                c.projection == ndtrace::scene::desc::Projection::Perspective,
+                c.projection == ndtrace::camera::Projection::Perspective,
             )?;
         });
         Ok(d)

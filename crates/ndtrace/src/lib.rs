@@ -1,9 +1,10 @@
 //! # ndtrace — N-dimensional ray tracing core
 //!
 //! A pure-Rust implementation of the geometry and rendering of Andrew J. Hanson's SIGGRAPH '98
-//! course "Computer Graphics beyond the Third Dimension" (the course notes live in
-//! `shared/seed/hanson-siggraph98-nd-graphics-course-notes.md`; equation numbers in doc comments
-//! refer to the paper "Geometry for N-Dimensional Graphics" printed there).
+//! course "Computer Graphics beyond the Third Dimension" (SIGGRAPH '98 Course Notes; see
+//! `CITATION.cff` at the repository's root). Equation numbers in doc comments refer to the
+//! paper "Geometry for N-Dimensional Graphics" printed in those notes; `docs/architecture.md`
+//! maps each module to the part of the notes it implements.
 //!
 //! Numeric code is written once over `const N: usize` with `[f64; N]` storage; the single place
 //! that turns a runtime dimension into a compile-time one is the [`with_dim!`] macro.

@@ -786,3 +786,6 @@ impl<const N: usize> Bvh<N> {
         Self::from_simplices(&points, &ids)
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -379,3 +379,6 @@ impl<const N: usize> CellGeometry<N> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests;

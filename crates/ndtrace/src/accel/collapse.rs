@@ -399,3 +399,6 @@ pub(super) fn wide_tree<const N: usize>(
         cell_prepared,
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -331,6 +331,11 @@ impl<const N: usize> Instances<N> {
         )
     }
 
+    /// First global id of each object's simplices.
+    pub fn offsets(&self) -> &[u32] {
+        &self.offsets
+    }
+
     /// The trees.
     pub fn trees(&self) -> &[Arc<Bvh<N>>] {
         &self.trees
@@ -548,3 +553,6 @@ impl<const N: usize> Instances<N> {
         self.list.len()
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -117,6 +117,8 @@ mod collapse;
 mod cell;
 // 3c. Instances: trees in their objects' own space, reached by mapped rays.
 mod instance;
+// 3d. The index of a scene's objects behind one constructor: which tree holds what, and how.
+mod objects;
 // 4. The queries.
 mod traverse;
 // The memory layout of the trees, the rays prepared for traversal, the kernels, the counters.
@@ -135,6 +137,10 @@ pub use cell::FlatCell;
 pub use instance::{Instances, ToObject};
 pub(crate) use kernels::prefetch_of;
 pub use morton::MORTON_MIN;
+pub use objects::{
+    build_index, bvh_bytes, empty_box, held_box, merge_boxes, offsets_of, rebuild_members,
+    AccelObject, AccelOptions, Built, FlatFacets, Meshes, Rebuilt, ShapeHints, INSTANCE_MIN,
+};
 pub use packet::PACKET;
 pub use simplex::{simplex_bounds, Bounds, PreparedSimplex, BARY_SLACK, PLANE_ROUNDING};
 #[cfg(feature = "traversal-stats")]

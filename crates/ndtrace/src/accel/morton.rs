@@ -423,3 +423,6 @@ impl<const N: usize> Bvh<N> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -362,3 +362,6 @@ pub fn simplex_bounds<const N: usize>(points: &[[f64; N]]) -> Bounds<N> {
     }
     (lo, hi)
 }
+
+#[cfg(test)]
+mod tests;

@@ -649,3 +649,6 @@ pub(super) fn transpose8(mut x: u64) -> u64 {
     let t = (x ^ (x >> 28)) & 0x0000_0000_f0f0_f0f0;
     x ^ t ^ (t << 28)
 }
+
+#[cfg(test)]
+mod tests;

@@ -380,3 +380,6 @@ impl<const N: usize> Bvh<N> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -55,8 +55,8 @@ pub use aids::{Cutaway, ViewLayout};
 pub use illustrative::RetinaCamera;
 pub use montage::{slice_layout, Layout, SEPARATOR};
 pub use options::{
-    CompositeMode, CompositeOptions, GivenKeys, HiddenEdges, OptionError, Projection,
-    DEFAULT_DISTANCE, DEFAULT_STAGE_DISTANCE, MAX_PIXELS, MAX_TURNTABLE_FRAMES,
+    CompositeMode, CompositeOptions, GivenKeys, HiddenEdges, OptionError, DEFAULT_DISTANCE,
+    DEFAULT_STAGE_DISTANCE, MAX_PIXELS, MAX_TURNTABLE_FRAMES,
 };
 pub use overlay::{PixelEdge, RetinaEdge, MAX_RETINA_DIM};
 
@@ -153,7 +153,12 @@ pub fn composite_retina(
     let mut stage = 0;
     while vol.shape.len() > 3 {
         let (f, d) = stage_params(&vol.shape, opts.stages.get(stage).copied());
-        vol = project_stage(&vol, f, d, opts.projection == Projection::Orthographic);
+        vol = project_stage(
+            &vol,
+            f,
+            d,
+            opts.projection == crate::camera::Projection::Orthographic,
+        );
         stage += 1;
     }
     let rgba = match vol.shape.len() {
@@ -476,6 +481,3 @@ pub(super) fn over(s: [f32; 4], bg: [f32; 3]) -> [f32; 4] {
 
 #[cfg(test)]
 mod tests;
-
-#[cfg(test)]
-mod illustrative_tests;

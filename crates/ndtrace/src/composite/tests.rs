@@ -2,6 +2,7 @@
 
 use super::volume::{render_3d, Grid};
 use super::*;
+use crate::camera::Projection;
 use crate::testutil::rng;
 use crate::NdError;
 use rand::Rng;

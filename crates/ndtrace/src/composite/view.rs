@@ -8,7 +8,8 @@ use super::montage::{render_tiles, Tiles};
 use super::overlay::{self, PixelEdge, RetinaEdge};
 use super::stages::{project_stage, stage_params, stage_point};
 use super::volume::{occupied_box, render_view, Camera3, Grid};
-use super::{prepare, CompositeMode, CompositeOptions, Projection, RetinaExtras, Volume};
+use super::{prepare, CompositeMode, CompositeOptions, RetinaExtras, Volume};
+use crate::camera::Projection;
 use glam::DVec3;
 
 /// What the views are rendered from.

@@ -1,7 +1,8 @@
 //! The 3D volume and its orbiting camera (N = 4, and N ≥ 5 after the stages): the volume,
 //! maximum-intensity and first-hit renderings of [`CompositeMode`].
 
-use super::{over, Accum, CompositeMode, CompositeOptions, Projection, Volume};
+use super::{over, Accum, CompositeMode, CompositeOptions, Volume};
+use crate::camera::Projection;
 use glam::{DVec3, Vec4};
 use rayon::prelude::*;
 

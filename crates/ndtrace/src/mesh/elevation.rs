@@ -314,5 +314,4 @@ const KUHN: [[[usize; 3]; 4]; 6] = {
 };
 
 #[cfg(test)]
-#[path = "elevation_tests.rs"]
 mod tests;

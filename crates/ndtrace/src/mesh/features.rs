@@ -420,5 +420,4 @@ fn away<const N: usize>(vertices: &[Vector<N>], face: &[u32], apex: u32) -> Opti
 }
 
 #[cfg(test)]
-#[path = "features_tests.rs"]
 mod tests;

@@ -36,8 +36,10 @@ pub(crate) fn find(parent: &mut [u32], mut x: u32) -> u32 {
     x
 }
 
+pub mod edge_cache;
 pub mod elevation;
 pub mod features;
 mod filing;
 pub mod flat;
+pub use edge_cache::EdgeCache;
 pub use features::feature_edges;

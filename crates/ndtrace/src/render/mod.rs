@@ -15,7 +15,10 @@
 //!   rays to the BVH as packets ([`crate::accel::PACKET`] rays), the shadow rays of their hits
 //!   as packets toward each light, constants computed once per trace, shadow rays that cannot
 //!   be blocked not traced. It gives [`shade_hit`]'s bits for every ray (tested cell by cell);
-//! - [`pool`]: the retina's output buffers, reused between traces.
+//! - [`pool`]: the retina's output buffers, reused between traces;
+//! - `splat.rs` and `surface.rs`: after the trace, the surfaces drawn directly
+//!   ([`crate::surface`]) projected into the retina as thin sheets, occluded by depth and
+//!   blended by opacity, each point lit by the limit of its thickening's lighting.
 //!
 //! A ray's hit does not depend on the rays it travels with, and every cell's result depends
 //! only on the scene, the seed and the cell index, so the retina is bit-identical whatever the
@@ -25,6 +28,8 @@ mod packets;
 pub mod pool;
 mod sampling;
 pub mod shade;
+mod splat;
+mod surface;
 mod tiles;
 mod trace;
 

@@ -8,9 +8,9 @@
 
 use super::sampling::SplitMix;
 use crate::accel::{BOX_PAD, PLANE_ROUNDING};
+use crate::linalg::Rgb;
 use crate::linalg::{add, add_scaled, dot, norm, scale, sub, Vector};
 use crate::ray::{Hit, Ray};
-use crate::scene::build::Rgb;
 use crate::scene::{Light, Scene};
 
 /// Shadow rays start this fraction of the scene's diagonal off the surface, toward the light.

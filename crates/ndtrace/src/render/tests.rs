@@ -977,8 +977,8 @@ fn slabs_traced_apart_and_concatenated_are_the_whole_retina() {
 /// The scene `desc` built with the SAH tree and with the Morton tree.
 fn sah_and_morton<const N: usize>(desc: &crate::scene::SceneDesc) -> (Scene<N>, Scene<N>) {
     let build = |morton_min| {
-        let min = crate::scene::build::INSTANCE_MIN;
-        crate::scene::build::build_using::<N>(desc, None, None, morton_min, min).unwrap()
+        let min = crate::accel::INSTANCE_MIN;
+        crate::scene::build::build_using::<N>(desc, None, None, (morton_min, min)).unwrap()
     };
     (build(usize::MAX), build(0))
 }

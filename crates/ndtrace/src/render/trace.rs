@@ -18,7 +18,7 @@ use std::ops::Range;
 use std::sync::atomic::Ordering;
 
 /// Traces every retina cell of `scene` (on the current rayon pool), then projects its surface
-/// objects into the retina ([`crate::surface::splat`]).
+/// objects into the retina (`render/splat.rs`).
 pub fn trace<const N: usize>(scene: &Scene<N>, progress: &Progress) -> NdResult<Retina> {
     let mut retina = trace_cells(scene, progress, 0..scene.camera.cell_count())?;
     retina.shape = scene.camera.numpy_shape();
@@ -87,7 +87,7 @@ fn trace_cells<const N: usize>(
     }
     .and_then(|mut retina| {
         // Surfaces ("bear hair"), projected over what the rays saw.
-        crate::surface::splat(scene, &mut retina, cells.start, progress)?;
+        super::splat::splat(scene, &mut retina, cells.start, progress)?;
         Ok(retina)
     })
 }

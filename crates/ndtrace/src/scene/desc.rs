@@ -29,8 +29,7 @@ use serde::{Deserialize, Serialize};
 
 pub use super::table::{Column, Rows, Shared, Table};
 
-/// The camera's projection, a scene key (`camera.projection`) defined beside the camera.
-pub use crate::camera::Projection;
+use crate::camera::Projection;
 
 /// A whole scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

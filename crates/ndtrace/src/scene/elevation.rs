@@ -146,7 +146,7 @@ pub(crate) fn elevation_object<const N: usize>(
     crate::memory::check(
         points * (8.0 * 4.0 + 8.0 * 4.0 + 8.0)
             + tets * 4.0 * 4.0
-            + super::build::bvh_bytes(N, tets),
+            + crate::accel::bvh_bytes(N, tets),
         &format!(
             "an elevation map of {} grid points and its BVH",
             field.values.len()

@@ -4,14 +4,11 @@
 
 use super::desc::Coefficient;
 use super::errors::PathError;
-use crate::linalg::{Matrix, Vector};
+use crate::linalg::{Matrix, Rgb, Vector};
 use crate::mesh::Mesh;
 
 /// A field's value or the located error.
 pub(crate) type R<T> = Result<T, PathError>;
-
-/// An RGB triple.
-pub type Rgb = [f64; 3];
 
 /// Every number of `v` is finite; else the error names the first that is not (`path[i]`).
 pub(crate) fn finite_list(v: &[f64], path: &str) -> R<()> {

@@ -208,3 +208,6 @@ fn affine_rows<const N: usize>(rows: &[Vec<f64>], path: &str) -> R<(Matrix<N>, V
     }
     Ok((m, b))
 }
+
+#[cfg(test)]
+mod tests;

@@ -4,23 +4,21 @@
 //! from 4D directly … Avoids volume rendering altogether").
 //!
 //! A triangulated 2-surface of R^4 is projected through the 4D camera into the 3D retina, where
-//! it is a thin sheet `width` cells thick ([`splat`]), and shaded by the limit of the lighting
-//! of its circle-bundle thickening as the circles shrink to a point ([`shade`]). It is occluded
-//! by depth against the traced scene and against itself, and may be transparent
-//! (`material.opacity`).
+//! it is a thin sheet `width` cells thick, and shaded by the limit of the lighting of its
+//! circle-bundle thickening as the circles shrink to a point ([`tube`]). It is occluded by depth
+//! against the traced scene and against itself, and may be transparent (`material.opacity`).
 //!
-//! The pieces: [`Surface`] (the triangles and their tangent planes, built with the scene),
-//! `shade.rs` (the limit lighting), `splat.rs` (projection into the retina, fragments, their
-//! occlusion and blending).
+//! The pieces: here, [`Surface`] (the triangles and their tangent planes, built with the
+//! scene); `tube.rs`, the limit lighting's means over a tube; the drawing is the tracer's:
+//! `render/surface.rs` (a surface point's colour) and `render/splat.rs` (projection into the
+//! retina, fragments, their occlusion and blending).
 
-pub mod shade;
-mod splat;
+pub mod tube;
 
 #[cfg(test)]
 mod tests;
 
-pub use shade::{tube_diffuse, tube_specular};
-pub use splat::splat;
+pub use tube::{tube_diffuse, tube_specular};
 
 use crate::linalg::{dot, norm, scale, sub, Matrix, Vector};
 

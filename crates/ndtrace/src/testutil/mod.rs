@@ -43,6 +43,15 @@ pub fn unit_toml<const N: usize>(k: usize, x: f64) -> String {
     format!("[{}]", v.join(", "))
 }
 
+/// The message of the error that loading the scene text `text` (as `scene.toml`) gives; panics
+/// when it loads.
+pub fn load_error(text: &str) -> String {
+    match crate::scene::load_toml_str(text, "scene.toml", None) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("expected an error for:\n{text}"),
+    }
+}
+
 /// A random rotation (orthonormal, det +1) from Gram–Schmidt on random rows.
 pub fn random_rotation<const N: usize>(r: &mut TestRng) -> Matrix<N> {
     loop {

@@ -13,9 +13,9 @@
 
 pub mod colormap;
 
+use crate::linalg::Rgb;
 use crate::linalg::{add, dot, mat_vec, solve_block, sub, Matrix, Vector};
 use crate::mesh::Mesh;
-use crate::scene::build::Rgb;
 pub use colormap::Colormap;
 
 /// Bands where a per-vertex scalar crosses given values.

@@ -34,7 +34,8 @@ impl<const N: usize> TraversalRay<N> {
 }
 
 impl<const N: usize> LeafBlock<N> {
-    /// Intersects the ray with every lane (see `hit_sse2` on x86_64, and `hit_portable`).
+    /// Intersects the ray with every lane (`hit_portable`; the traversal calls `hit_avx2` instead on
+    /// x86_64 CPUs with AVX2).
     #[inline(always)]
     pub(in crate::accel) fn hit(&self, ray: &PreparedRay<N>, tmin: f64, tmax: f64) -> BlockHits<N> {
         self.hit_portable(ray, tmin, tmax)
@@ -129,3 +130,6 @@ pub(in crate::accel) fn within<const AVX: bool, const P: usize>(t: f32, limit: &
     }
     portable::within(t, limit)
 }
+
+#[cfg(test)]
+mod tests;

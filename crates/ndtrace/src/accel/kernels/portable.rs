@@ -43,7 +43,7 @@ impl<const N: usize> TraversalRay<N> {
 }
 
 impl<const N: usize> LeafBlock<N> {
-    /// Portable version of the x86_64 block test `hit_sse2` (same arithmetic, same results):
+    /// Portable version of the x86_64 block test `hit_avx2` (same arithmetic, same results):
     /// [`PreparedSimplex::hit_rounded`] lane by lane.
     #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
     #[inline(always)]
