@@ -7,7 +7,10 @@ graphs for cycles: the top-level modules (`scene`, `render`, `accel`, …) and, 
 folder, its files (`scene::build`, `scene::fields`, …). A folder's `mod.rs` declaring and
 re-exporting its own files is structure, not a dependency, and is not counted.
 
-    python3 tools/module_cycles.py [--edges]
+    python3 tools/module_cycles.py [--edges | --layers]
+
+`--edges` prints every edge; `--layers` the top-level modules by layer, as docs/architecture.md
+lists them (a test checks that the page says the same).
 """
 import re
 import sys
@@ -85,7 +88,8 @@ def strip_test_items(text: str) -> str:
 def expand_use_groups(text: str):
     """Yields every path of the source: `use a::{b, c::{d}}` gives a::b and a::c::d."""
     for m in re.finditer(r"\buse\s+([^;]+);", text):
-        yield from _expand(m.group(1).replace("\n", " ").replace(" ", ""))
+        tree = re.sub(r"\s+as\s+\w+", "", m.group(1))
+        yield from _expand(re.sub(r"\s+", "", tree))
     body = re.sub(r"\buse\s+[^;]+;", "", text)
     yield from re.findall(r"(?:\$?crate|super|self)(?:::(?:super|[A-Za-z_][A-Za-z0-9_]*))+", body)
 
@@ -109,8 +113,10 @@ def _expand(tree: str):
                 yield from _expand(prefix + part)
 
 
-def resolve(path: str, here: tuple, modules: set) -> tuple | None:
-    """The module a path names: its longest prefix that is a module of the crate."""
+def resolve(path: str, here: tuple, modules: set, reexports: dict) -> tuple | None:
+    """The module a path names: its longest prefix that is a module of the crate, or, for an item
+    a folder re-exports from one of its files (`crate::NdError`, `crate::accel::Bvh`), that
+    file's module."""
     segs = path.split("::")
     if segs[0] in ("crate", "$crate"):
         target, rest = (), segs[1:]
@@ -122,9 +128,12 @@ def resolve(path: str, here: tuple, modules: set) -> tuple | None:
     else:
         return None
     for s in rest:
-        if target + (s,) not in modules:
+        if target + (s,) in modules:
+            target = target + (s,)
+        elif s in reexports.get(target, {}):
+            return reexports[target][s]
+        else:
             break
-        target = target + (s,)
     return target
 
 
@@ -160,6 +169,22 @@ def circles(graph: dict) -> list:
     return out
 
 
+def layers(graph: dict, nodes: set) -> list:
+    """The modules by layer: a module's layer is one more than the highest layer it uses (1 for
+    one that uses no other module)."""
+    depth: dict = {}
+
+    def of(v):
+        if v not in depth:
+            depth[v] = 1 + max((of(w) for w in graph.get(v, ())), default=0)
+        return depth[v]
+
+    out: dict = {}
+    for v in nodes:
+        out.setdefault(of(v), []).append(v)
+    return [sorted(out[k]) for k in sorted(out)]
+
+
 def shipped_files() -> dict:
     """The files of the shipped code: those `mod` declarations outside `#[cfg(test)]` reach from
     lib.rs, with their code (test items removed)."""
@@ -182,12 +207,27 @@ def shipped_files() -> dict:
 def main() -> int:
     files = shipped_files()
     modules = {module_of(f) for f in files}
+    # What each folder (and the crate's root) re-exports from its own files: `pub use
+    # error::NdError` in lib.rs, `pub use tree::Bvh` in accel/mod.rs.
+    reexports: dict = {}
+    for f, code in files.items():
+        if f.name not in ("mod.rs", "lib.rs"):
+            continue
+        here = module_of(f)
+        for m in re.finditer(r"\bpub(?:\([a-z]+\))?\s+use\s+([^;]+);", code):
+            tree = re.sub(r"\s+as\s+", "@", m.group(1))
+            for p in _expand(re.sub(r"\s+", "", tree)):
+                segs = p.split("::")
+                segs = segs[1:] if segs[0] == "self" else segs
+                if len(segs) >= 2 and here + (segs[0],) in modules:
+                    name = segs[-1].split("@")[-1]
+                    reexports.setdefault(here, {})[name] = here + (segs[0],)
     edges: dict = {}
     for f, code in files.items():
         here = module_of(f)
         is_mod = f.name in ("mod.rs", "lib.rs")
         for p in expand_use_groups(code):
-            t = resolve(p, here, modules)
+            t = resolve(p, here, modules, reexports)
             if t is None or t == here or not t:
                 continue
             if is_mod and t[: len(here)] == here:
@@ -210,6 +250,15 @@ def main() -> int:
             failed = True
             inner = [f"{a} -> {b}" for a in comp for b in sorted(graph.get(a, ())) if b in comp]
             print(f"module_cycles: a cycle among {where}: {', '.join(comp)} ({'; '.join(inner)})")
+    if not failed and "--layers" in sys.argv:
+        for k, names in enumerate(layers(graphs["the top-level modules"], {m[0] for m in modules if m}), 1):
+            print(f"{k}. {', '.join(names)}")
+        for folder in sorted({m[:-1] for m in modules if len(m) > 1}):
+            files = {m[-1] for m in modules if len(m) > 1 and m[:-1] == folder}
+            graph = graphs.get(f"the files of {'/'.join(folder)}/", {})
+            steps = ["; ".join(", ".join(n) for n in [names]) for names in layers(graph, files)]
+            print(f"{'/'.join(folder)}/: {' ← '.join(steps)}")
+        return 0
     if not failed:
         print(f"module_cycles: no cycles ({len(modules)} modules, {sum(map(len, edges.values()))} edges)")
     return 1 if failed else 0

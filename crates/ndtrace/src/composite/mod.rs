@@ -56,9 +56,10 @@ pub use illustrative::RetinaCamera;
 pub use montage::{slice_layout, Layout, SEPARATOR};
 pub use options::{
     CompositeMode, CompositeOptions, GivenKeys, HiddenEdges, OptionError, DEFAULT_DISTANCE,
-    DEFAULT_STAGE_DISTANCE, MAX_PIXELS, MAX_TURNTABLE_FRAMES,
+    MAX_PIXELS, MAX_TURNTABLE_FRAMES,
 };
 pub use overlay::{PixelEdge, RetinaEdge, MAX_RETINA_DIM};
+pub use stages::DEFAULT_STAGE_DISTANCE;
 
 use crate::{NdError, NdResult};
 use glam::Vec4;

@@ -75,8 +75,6 @@ pub enum HiddenEdges {
 
 /// Default camera distance, in half-diagonals of the retina cube.
 pub const DEFAULT_DISTANCE: f64 = 4.0;
-/// Default eye distance d_k of a recursive stage, in half-lengths of the stage's longest axis.
-pub const DEFAULT_STAGE_DISTANCE: f64 = 3.0;
 /// Largest number of pixels of a picture.
 pub const MAX_PIXELS: usize = 1 << 28;
 /// Most frames of a turntable.
@@ -228,7 +226,7 @@ composite_options! {
         /// "divide by (d − x)/f". Output cells have the input's grid; each output cell's ray is
         /// sampled (multilinearly, zero outside the box) at every input slice, front to back,
         /// with the step correction of the volume mode for its oblique path length. Requires
-        /// f_k > 0 and d_k > a_k. Default d_k = [`DEFAULT_STAGE_DISTANCE`] = 3 and
+        /// f_k > 0 and d_k > a_k. Default d_k = [`super::DEFAULT_STAGE_DISTANCE`] = 3 and
         /// f_k = d_k − a_k + c/2, which maps the nearest slice (index 0, centred at
         /// x_k = −a_k + c/2) one-to-one onto the film; farther slices appear smaller, toward
         /// the centre. With orthographic projection every stage is a parallel projection and

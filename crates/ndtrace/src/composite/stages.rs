@@ -1,7 +1,10 @@
 //! Recursive projection for N ≥ 5: one k-D → (k−1)-D emission–absorption stage per axis,
 //! down to a 3D volume (see [`CompositeOptions::stages`](super::CompositeOptions::stages)).
 
-use super::{Accum, Volume, DEFAULT_STAGE_DISTANCE};
+use super::{Accum, Volume};
+
+/// Default eye distance d_k of a recursive stage, in half-lengths of the stage's longest axis.
+pub const DEFAULT_STAGE_DISTANCE: f64 = 3.0;
 use glam::Vec4;
 use rayon::prelude::*;
 
