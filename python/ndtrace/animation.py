@@ -21,6 +21,7 @@ from typing import Callable
 
 import numpy as np
 
+from ._optional import need
 from .composite import composite as _composite, scene_options
 from .files import to_srgb8, write_png
 from .retina import trace
@@ -93,12 +94,9 @@ def _video_kind(output: str, video: str | None) -> str | None:
     kind = ext[1:] if ext != ".png" else video
     if kind == "mp4":
         try:
-            import imageio_ffmpeg  # noqa: F401
-        except ImportError:
-            raise ValueError(
-                "MP4 output needs imageio-ffmpeg (pip install imageio-ffmpeg); "
-                "write a .gif or numbered .png frames instead"
-            ) from None
+            need("imageio_ffmpeg", extra="video", what="MP4 output", package="imageio-ffmpeg")
+        except ImportError as e:
+            raise ValueError(f"{e}; write a .gif or numbered .png frames instead") from None
     folder = os.path.dirname(os.path.abspath(output))
     if not os.path.isdir(folder):
         raise ValueError(f"output {output}: folder {folder} does not exist")

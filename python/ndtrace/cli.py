@@ -29,6 +29,7 @@ import traceback
 import numpy as np
 
 from . import __version__, _ndtrace
+from ._optional import install
 from .files import IMAGE_FORMATS, write_exr, write_image
 from .retina import trace
 from .scene import Scene, load_dict, load_file
@@ -136,7 +137,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--dask", nargs="?", const="local", type=_dask_address, metavar="ADDRESS",
                    help="trace (or render an animation's frames) on Dask: 'local' (the default: "
                         "a LocalCluster on this machine) or a scheduler tcp://HOST:PORT "
-                        "(pip install 'ndtrace[dask]')")
+                        f"({install('dask')})")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.add_argument("--version", action="version", version=f"ndtrace {__version__}")

@@ -35,6 +35,8 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
+from ._optional import need
+
 __all__ = ["connect", "distributed_module", "trace_slabs", "render_frames", "SLABS_PER_THREAD"]
 
 #: Slabs per worker thread of a distributed trace: enough for even load and steady progress,
@@ -45,12 +47,8 @@ _FIELDS = ("rgba", "depth", "normal", "object_id", "primitive_id")
 
 
 def distributed_module():
-    try:
-        import distributed
-    except ImportError:
-        raise ImportError(
-            "rendering on Dask needs dask.distributed: pip install 'ndtrace[dask]'") from None
-    return distributed
+    """The ``distributed`` module (ImportError naming the ``dask`` extra without it)."""
+    return need("distributed", extra="dask", what="rendering on Dask", package="dask.distributed")
 
 
 def _check_client(client: Any):

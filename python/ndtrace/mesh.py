@@ -40,6 +40,7 @@ import warnings
 import numpy as np
 
 from . import _ndtrace
+from ._optional import need
 from .geometry import generalized_cross
 from .thicken import thicken_points, thicken_surface
 
@@ -49,20 +50,6 @@ __all__ = ["convex_hull", "orient", "feature_edges", "read", "read_field", "from
 #: The meshio cell types that hold the (N−1)-simplices of a dimension-N scene ("quad" cells are
 #: split into two triangles).
 CELL_TYPES: dict[int, tuple[str, ...]] = {2: ("line",), 3: ("triangle", "quad"), 4: ("tetra",)}
-
-_MESH_EXTRA = 'pip install "ndtrace[mesh]"'
-
-
-def _needs(package: str, what: str):
-    return _needs_extra(package, what, _MESH_EXTRA)
-
-
-def _needs_extra(package: str, what: str, extra: str):
-    try:
-        return __import__(package)
-    except ImportError:
-        raise ImportError(f"{what} needs {package}: {extra}") from None
-
 
 def _vertices(name: str, vertices, dim: int | None = None) -> np.ndarray:
     v = np.asarray(vertices)
@@ -171,7 +158,7 @@ def convex_hull(points) -> tuple[np.ndarray, np.ndarray]:
     n = p.shape[1]
     if len(p) < n + 1:
         raise ValueError(f"points: a hull in R^{n} needs at least {n + 1} points, got {len(p)}")
-    _needs("scipy", "ndtrace.mesh.convex_hull")
+    need("scipy", extra="mesh", what="ndtrace.mesh.convex_hull")
     from scipy.spatial import ConvexHull, QhullError
 
     try:
@@ -305,7 +292,7 @@ def read(path: str | os.PathLike, dim: int | None = None) -> tuple[np.ndarray, n
                 raise ValueError(f"{path}: the .npz has no array named {missing[0]!r} "
                                  f"(arrays: {', '.join(z.files) or 'none'})")
             return _mesh(z["vertices"], z["simplices"], dim)
-    meshio = _needs("meshio", f"reading {ext or 'extensionless'} mesh files")
+    meshio = need("meshio", extra="mesh", what=f"reading {ext or 'extensionless'} mesh files")
     try:
         m = meshio.read(path)
     except Exception as e:  # noqa: BLE001 - meshio raises many kinds; say which file
@@ -349,7 +336,7 @@ def read_field(path: str | os.PathLike, key: str | None = None) -> np.ndarray:
         raise FileNotFoundError(errno.ENOENT, "no such field file", path)
     lower = path.lower()
     if lower.endswith((".nii", ".nii.gz")):
-        nibabel = _needs_extra("nibabel", "reading NIfTI fields", 'pip install "ndtrace[nifti]"')
+        nibabel = need("nibabel", extra="nifti", what="reading NIfTI fields")
         try:
             img = nibabel.load(path)
             data = np.asanyarray(img.dataobj)

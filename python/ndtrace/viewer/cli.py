@@ -17,6 +17,7 @@ import sys
 import traceback
 
 from .. import __version__
+from .._optional import need
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -59,9 +60,9 @@ def run(argv: list[str]) -> int:
         if len(size) != 2:
             raise UsageError(f"--size: expected WxH, got {args.size!r}")
     try:
-        import aiohttp  # noqa: F401
-    except ImportError:
-        raise UsageError('ndtrace view needs aiohttp: pip install "ndtrace[view]"') from None
+        need("aiohttp", extra="view", what="ndtrace view")
+    except ImportError as e:
+        raise UsageError(str(e)) from None
     scene = _load(args.scene)
     scene = _apply_sets(scene, args.set, scene._base or os.path.dirname(os.path.abspath(args.scene)))
     from .server import serve

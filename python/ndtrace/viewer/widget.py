@@ -14,6 +14,7 @@ from importlib import resources
 
 import numpy as np
 
+from .._optional import need
 from ..scene import Scene
 from .server import dispatch
 from .session import ViewSession
@@ -52,10 +53,7 @@ def widget_esm() -> str:
 
 
 def _widget_class():
-    try:
-        import anywidget
-    except ImportError:
-        raise ImportError('ndtrace.widget needs anywidget: pip install "ndtrace[notebook]"') from None
+    anywidget = need("anywidget", extra="notebook", what="ndtrace.widget")
 
     class ViewerWidget(anywidget.AnyWidget):
         """The ndtrace viewer of one scene in a notebook (see :func:`ndtrace.widget`)."""
