@@ -1,7 +1,7 @@
 """Type stubs of the compiled extension. Use the ``ndtrace`` package, not this module."""
 
 from types import ModuleType
-from typing import Callable, Protocol
+from typing import Callable, Protocol, final
 
 import numpy as np
 import numpy.typing as npt
@@ -72,6 +72,7 @@ rotation: _RotationKernels
 
 # -- scenes and tracing ---------------------------------------------------------------
 
+@final
 class CompiledScene:
     """A validated scene with its BVH, built once and reused by every trace."""
 
@@ -117,6 +118,10 @@ def load_dict(
     reader: _MeshReader | None = None,
     like: CompiledScene | None = None,
 ) -> CompiledScene: ...
+def release_buffers() -> int:
+    """Frees the retina buffers kept for reuse by later traces (kept, up to 256 MiB, when numpy
+    frees a traced retina's arrays); returns the bytes freed."""
+
 def lendable(value: object) -> bool:
     """Whether the loader reads a numpy array's numbers in place instead of copying them: a
     C-ordered, aligned array whose numbers lie in a ``bytes`` object (``np.frombuffer`` of
