@@ -38,24 +38,26 @@ if _started_as_command():
         pass
 
 try:
-    from . import _ndtrace
-    from . import geometry
-    from . import rotation
-    from . import frames
-    from . import mesh
-    from . import surfaces
-    from .retina import Retina, trace
+    from . import (
+        _ndtrace,
+        animation,
+        display,
+        frames,
+        geometry,
+        mesh,
+        rotation,
+        surfaces,
+        viewer,
+    )
     from ._ndtrace import InternalError, release_buffers
+    from .animation import animate
     from .composite import composite
+    from .display import show
     from .edges import edge_segments, visible_edges
     from .files import read_exr, write_exr, write_image, write_png
-    from .svg import write_svg
+    from .retina import Retina, trace
     from .scene import Scene, load_dict, load_file, load_toml
-    from . import animation
-    from .animation import animate
-    from . import display
-    from .display import show
-    from . import viewer
+    from .svg import write_svg
     from .viewer import widget
 except KeyboardInterrupt:
     # Ctrl-C before the handler above was installed.

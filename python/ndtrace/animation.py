@@ -21,16 +21,28 @@ from typing import Callable
 
 import numpy as np
 
+from . import _ndtrace
+from ._dask import render_frames
+from ._description import plain_scene, scene_reader
 from ._optional import need
-from .composite import composite as _composite, scene_options
+from .composite import composite as _composite
+from .composite import scene_options
 from .files import to_srgb8, write_png
 from .retina import trace
-from .scene import Scene, _reanimated, load_dict
+from .scene import Scene, load_dict
 
 __all__ = ["animate", "frame_scene", "frame_paths", "gif_frame_ms", "render_frame",
            "GIF_MEMORY_LIMIT"]
 
 VIDEOS = ("gif", "mp4", None)
+
+
+def _reanimated(scene: Scene, data: dict) -> Scene:
+    """``data`` — ``scene``'s description with another ``[animation]`` table — as a scene that
+    shares ``scene``'s build when nothing else differs (else built anew, as :func:`load_dict`)."""
+    compiled = _ndtrace.load_dict(plain_scene(data, "<dict>"), "<dict>", scene._base, scene_reader,
+                                  scene.compiled())
+    return Scene._from_compiled(compiled, scene._base)
 
 
 def _table(scene: Scene, animation: dict | None, frames: int | None) -> Scene:
@@ -261,9 +273,8 @@ def animate(
 
     try:
         if client is not None:
-            from .cluster import render_frames
-
-            render_frames(animated, count, client, threads, options, cells, progress, write)
+            render_frames(animated, count, client, threads, options, cells, progress, write,
+                          render_frame)
         else:
             for k in range(count):
                 tick = None if progress is None else (lambda done, _total, k=k: progress(k * cells + done, count * cells))

@@ -20,10 +20,11 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from . import _ndtrace
-from .composite import _array, composite, scene_options
-from .files import c_array
+from ._description import plain
+from ._util import c_array, float32_array
+from .composite import composite, scene_options
 from .retina import Retina, trace
-from .scene import Scene, _plain
+from .scene import Scene
 
 __all__ = ["write_svg", "svg_text"]
 
@@ -69,8 +70,8 @@ def svg_text(scene_or_retina, *, fill: bool = True, threads: int | None = None, 
     hidden = opts.get("hidden_edges", "dashed")
     keys = {k: v for k, v in opts.items() if v is not None}
     rows = np.asarray(_ndtrace.picture_edges(
-        _array("retina.rgba", retina.rgba), _array("retina.depth", retina.depth), _plain(keys),
-        threads, _array("retina.normal", retina.normal), retina._camera_info(), retina._edges(angle)))
+        float32_array("retina.rgba", retina.rgba), float32_array("retina.depth", retina.depth), plain(keys),
+        threads, float32_array("retina.normal", retina.normal), retina._camera_info(), retina._edges(angle)))
     defaults = _ndtrace.composite_defaults()
     w, h = (int(v) for v in (opts.get("size") or defaults["size"]))
     width = float(opts.get("edge_width") or 0.0) or max(1.0, min(w, h) / 300.0)
