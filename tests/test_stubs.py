@@ -11,7 +11,6 @@ import inspect
 from pathlib import Path
 from types import ModuleType
 
-
 from ndtrace import _ndtrace
 
 STUB = Path(__file__).resolve().parent.parent / "python" / "ndtrace" / "_ndtrace.pyi"

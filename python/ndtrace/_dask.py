@@ -15,7 +15,8 @@ import signal
 import threading
 import time
 import uuid
-from typing import Any, Callable, Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
 import numpy as np
 
@@ -109,7 +110,7 @@ class _Signals:
         self.holding = False
         self.previous: dict = {}
 
-    def __enter__(self) -> "_Signals":
+    def __enter__(self) -> _Signals:
         if threading.current_thread() is threading.main_thread():
             self.previous = {s: h for s in _WATCHED if callable(h := signal.getsignal(s))}
         for s, handler in self.previous.items():

@@ -51,7 +51,7 @@ def snapshot(path: str, key: str, value: np.ndarray) -> np.ndarray | None:
         if isinstance(value, np.ma.MaskedArray):
             if dtype == np.int64:
                 return None
-            a = np.ascontiguousarray(value.astype(np.float64).filled(np.nan))
+            a = np.ascontiguousarray(np.ma.filled(value.astype(np.float64), np.nan))
         else:
             a = np.ascontiguousarray(value, dtype=dtype)
     return in_bytes(a)

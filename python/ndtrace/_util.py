@@ -119,7 +119,7 @@ def field_array(name: str, field) -> np.ndarray:
     NaN)."""
     f = np.asanyarray(field)
     if isinstance(f, np.ma.MaskedArray):
-        f = f.astype(np.float64).filled(np.nan)
+        f = np.ma.filled(f.astype(np.float64), np.nan)
     if f.dtype.kind not in "biuf":
         raise ValueError(f"{name}: expected a numeric 3D array, got dtype {f.dtype}")
     if f.ndim != 3:

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import os
 import tempfile
-from typing import Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -25,8 +26,7 @@ from . import _ndtrace
 from ._dask import render_frames
 from ._description import plain_scene, scene_reader
 from ._optional import need
-from .composite import composite as _composite
-from .composite import scene_options
+from .composite import composite as _composite, scene_options
 from .files import to_srgb8, write_png
 from .retina import trace
 from .scene import Scene, load_dict
@@ -136,7 +136,7 @@ class _Video:
         fd, self.tmp = tempfile.mkstemp(prefix=".ndtrace-", suffix="." + kind, dir=folder)
         os.close(fd)
         self.frames: list = []  # GIF: palette images
-        self.writer = None  # MP4: imageio-ffmpeg's generator
+        self.writer: Any = None  # MP4: imageio-ffmpeg's generator
         self.size: tuple[int, int] | None = None
 
     def add(self, rgb: np.ndarray) -> None:

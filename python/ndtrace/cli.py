@@ -24,8 +24,7 @@ import time
 import traceback
 
 from . import _ndtrace
-from ._command import ScriptError as ScriptError
-from ._command import UsageError, apply_sets, ints, load_scene
+from ._command import ScriptError as ScriptError, UsageError, apply_sets, ints, load_scene
 from ._ndtrace import __version__
 from ._optional import install
 from .animation import animate, write_frames

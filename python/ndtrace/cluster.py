@@ -28,12 +28,12 @@ from __future__ import annotations
 import contextlib
 import logging
 import signal
-from typing import Any, Callable, Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
 import numpy as np
 
-from ._dask import SLABS_PER_THREAD, distributed_module, trace_slabs
-from ._dask import render_frames as _render_frames
+from ._dask import SLABS_PER_THREAD, distributed_module, render_frames as _render_frames, trace_slabs
 from .animation import render_frame
 
 __all__ = ["connect", "distributed_module", "trace_slabs", "render_frames", "SLABS_PER_THREAD"]

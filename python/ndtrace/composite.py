@@ -8,7 +8,7 @@ defaults and allowed ranges are declared and checked once, there.
 from __future__ import annotations
 
 import numbers
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

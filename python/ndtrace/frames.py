@@ -37,7 +37,8 @@ Example (the (3, 5) torus knot with its closed minimal-length quaternion frame, 
 from __future__ import annotations
 
 import numbers
-from typing import Callable, Literal
+from collections.abc import Callable
+from typing import Literal
 
 import numpy as np
 
@@ -125,13 +126,15 @@ def _quaternions(name: str, q) -> np.ndarray:
 
 
 def _positive(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value <= 0:
+    # (np.isfinite refuses some Reals, e.g. a Fraction, with a TypeError; numpy's stubs say so.)
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or not np.isfinite(value) or value <= 0:  # type: ignore[call-overload]
         raise ValueError(f"{name}: expected a finite number > 0, got {value!r}")
     return float(value)
 
 
 def _count(name: str, value, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not low <= value < 2**32:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not low <= int(value) < 2**32:
         raise ValueError(f"{name}: expected an integer in {low}..{2**32 - 1}, got {value!r}")
     return int(value)
 
@@ -584,7 +587,7 @@ def icosphere(subdivisions: int = 0):
     for _ in range(subdivisions):
         mid: dict[tuple[int, int], int] = {}
 
-        def middle(x: int, y: int) -> int:
+        def middle(x: int, y: int, mid: dict[tuple[int, int], int] = mid) -> int:
             key = (min(x, y), max(x, y))
             if key not in mid:
                 mid[key] = len(verts)

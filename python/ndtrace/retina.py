@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
+from . import _ndtrace
 from ._dask import trace_slabs
 from .scene import Scene, load_toml
 
@@ -34,7 +36,7 @@ class Retina:
     primitive_id: np.ndarray
     camera: str | None = None
     """The scene's ``[camera]`` section as TOML (stored in retina files)."""
-    _source: object = field(default=None, repr=False, compare=False)
+    _source: _ndtrace.CompiledScene | None = field(default=None, repr=False, compare=False)
     """The compiled scene this retina was traced from (its edges and camera), if any."""
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 

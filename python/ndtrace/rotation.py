@@ -56,7 +56,8 @@ Conventions
 from __future__ import annotations
 
 import operator
-from typing import Literal, Sequence
+from collections.abc import Sequence
+from typing import Literal
 
 import numpy as np
 

@@ -22,13 +22,13 @@ from __future__ import annotations
 import errno
 import os
 import warnings
-from typing import Any, Callable, ClassVar, Iterable
+from collections.abc import Callable, Iterable
+from typing import Any, ClassVar
 
 import numpy as np
 
 from . import _ndtrace
-from ._description import MAX_DEPTH as MAX_DEPTH
-from ._description import freeze_arrays, plain, plain_scene, scene_reader
+from ._description import MAX_DEPTH as MAX_DEPTH, freeze_arrays, plain, plain_scene, scene_reader
 from .mesh import from_object
 
 __all__ = ["Scene", "load_file", "load_dict", "load_toml"]
@@ -67,7 +67,7 @@ class Scene:
 
     # -- construction -------------------------------------------------------------------
     @classmethod
-    def _from_compiled(cls, compiled: _ndtrace.CompiledScene, base: str | None) -> "Scene":
+    def _from_compiled(cls, compiled: _ndtrace.CompiledScene, base: str | None) -> Scene:
         self = cls.__new__(cls)
         _warn(compiled)
         self._data = freeze_arrays(compiled.to_dict())
@@ -75,7 +75,7 @@ class Scene:
         self._compiled = compiled
         return self
 
-    def _changed(self) -> "Scene":
+    def _changed(self) -> Scene:
         self._compiled = None
         return self
 
@@ -90,7 +90,7 @@ class Scene:
         fov: float | None = None,
         extent: float | None = None,
         resolution,
-    ) -> "Scene":
+    ) -> Scene:
         """Sets the camera (see ``docs/scene-format.md``, ``[camera]``)."""
         cam: dict[str, Any] = {"position": plain(position), "projection": projection,
                                "resolution": plain(resolution)}
@@ -101,14 +101,14 @@ class Scene:
         self._data["camera"] = cam
         return self._changed()
 
-    def add_light(self, type: str, **keys) -> "Scene":
+    def add_light(self, type: str, **keys) -> Scene:
         """Adds a light: ``add_light("directional", direction=[...], color=[...])`` or
         ``add_light("point", position=[...], color=[...], falloff=...)``."""
         self._data.setdefault("lights", []).append({"type": type, **plain(keys)})
         return self._changed()
 
     def add_object(self, shape: str, *, material: dict | None = None,
-                   transform: Iterable[dict] | None = None, **shape_keys) -> "Scene":
+                   transform: Iterable[dict] | None = None, **shape_keys) -> Scene:
         """Adds an object: a generated shape (``"simplex"``, ``"hypercube"``,
         ``"cross_polytope"``, ``"sphere"`` with ``subdivisions``), ``"surface"`` (dim 4: a
         2-surface drawn directly, "bear hair", with ``vertices`` (V, 4), ``triangles`` (T, 3)
@@ -133,12 +133,12 @@ class Scene:
         self._data["objects"].append(obj)
         return self._changed()
 
-    def set_render(self, **options) -> "Scene":
+    def set_render(self, **options) -> Scene:
         """Sets ``[render]`` options: samples, seed, shadows, cull_backfaces, two_sided, mode."""
         self._data.setdefault("render", {}).update(plain(options))
         return self._changed()
 
-    def set_composite(self, **options) -> "Scene":
+    def set_composite(self, **options) -> Scene:
         """Sets ``[composite]`` options (how the retina becomes a picture: mode, crease_angle,
         depth_cue, …; see ``docs/scene-format.md``), checked by the core when the scene is
         rendered."""
@@ -176,7 +176,7 @@ class Scene:
         """The description as TOML; ``load_toml(scene.to_toml())`` gives an equal scene."""
         return self.compiled().to_toml()
 
-    def copy(self) -> "Scene":
+    def copy(self) -> Scene:
         """An independent copy: its own description (dicts and lists copied, read-only field
         arrays shared) and, until either is changed, the same built scene."""
         other = type(self).__new__(type(self))
@@ -185,7 +185,7 @@ class Scene:
         other._compiled = self._compiled
         return other
 
-    def __deepcopy__(self, memo: dict) -> "Scene":
+    def __deepcopy__(self, memo: dict) -> Scene:
         return self.copy()
 
     __copy__ = copy

@@ -66,7 +66,7 @@ def run(argv: list[str]) -> int:
     scene = load_scene(args.scene)
     scene = apply_sets(scene, args.set, scene._base or os.path.dirname(os.path.abspath(args.scene)))
     serve(scene, port=args.port, open_browser=not args.no_browser, name=os.path.basename(args.scene),
-          size=tuple(size) if size else None, threads=args.threads, draft_cells=args.draft_cells)
+          size=(size[0], size[1]) if size else None, threads=args.threads, draft_cells=args.draft_cells)
     sys.stderr.write("ndtrace view: stopped\n")
     return 0
 
