@@ -15,7 +15,6 @@ import base64
 import io
 import os
 import tempfile
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -104,7 +103,7 @@ def svg_text(scene_or_retina, *, fill: bool = True, threads: int | None = None, 
             style = (f'stroke-width="{HIDDEN_WIDTH * width:.3g}" stroke-opacity="{HIDDEN_OPACITY[hidden]}"'
                      + (f' stroke-dasharray="{DASH[0]} {DASH[1]}"' if hidden == "dashed" else ""))
             name = "hidden"
-        lines = [f'<g id={quoteattr(name + "-edges")} fill="none" stroke-linecap="round" {style}>']
+        lines = [f'<g id="{name}-edges" fill="none" stroke-linecap="round" {style}>']
         for x0, y0, x1, y1, _d0, _d1, r, g, b, _v in pieces:
             lines.append(f'<path d="M{x0:.2f} {y0:.2f}L{x1:.2f} {y1:.2f}" stroke="{_hex((r, g, b))}"/>')
         lines.append("</g>")
