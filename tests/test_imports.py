@@ -14,6 +14,8 @@ layers themselves are the contracts of ``[tool.importlinter]`` in pyproject.toml
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent.parent / "python" / "ndtrace"
@@ -173,3 +175,62 @@ def test_the_rules_see_each_offence():
         "pkg.low:7: imports json in a function (not an optional or deferred package)",
         "import cycle among pkg.high, pkg.low: pkg.high -> pkg.low -> pkg.high",
     ]
+
+
+#: ``dir(ndtrace)`` before the namespace became lazy (issue 50), without the private helpers of
+#: ``__init__``: each must still be an attribute.
+NAMESPACE = [
+    "InternalError", "MAX_DIM", "MIN_DIM", "Retina", "Scene", "__version__", "_ndtrace", "animate",
+    "animation", "composite", "display", "edge_segments", "edges", "files", "frames", "geometry",
+    "load_dict", "load_file", "load_toml", "mesh", "read_exr", "release_buffers", "retina", "rotation",
+    "scene", "show", "surfaces", "svg", "thicken", "trace", "viewer", "visible_edges", "widget",
+    "write_exr", "write_image", "write_png", "write_svg",
+]
+
+#: The submodules ``import ndtrace`` leaves for their first use.
+LAZY_MODULES = ["animation", "edges", "frames", "rotation", "surfaces", "svg", "viewer"]
+
+
+def test_the_lazy_namespace_has_every_name_and_loads_it_on_first_use():
+    # A fresh interpreter: this one has imported everything already.
+    script = f"""
+import sys, ndtrace
+lazy = {[f"ndtrace.{m}" for m in LAZY_MODULES]!r}
+print(sorted(m for m in lazy if m in sys.modules))
+print(sorted(set({NAMESPACE!r}) - set(dir(ndtrace))))
+print(sorted(ndtrace.__all__) == sorted(set(ndtrace.__all__)) and set(ndtrace.__all__) <= set(dir(ndtrace)))
+values = {{name: getattr(ndtrace, name) for name in {NAMESPACE!r}}}
+print(sorted(m for m in lazy if m not in sys.modules))
+print(ndtrace.widget is ndtrace.viewer.widget and ndtrace.animate is ndtrace.animation.animate
+      and ndtrace.write_svg is ndtrace.svg.write_svg and ndtrace.frames is sys.modules["ndtrace.frames"])
+namespace = {{}}
+exec("from ndtrace import *", namespace)
+print(sorted(set(ndtrace.__all__) - set(namespace)))
+try:
+    ndtrace.no_such_name
+except AttributeError as e:
+    print(e)
+"""
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         check=True).stdout.splitlines()
+    assert out == ["[]", "[]", "True", "[]", "True", "[]", "module 'ndtrace' has no attribute 'no_such_name'"]
+
+
+def test_the_lazy_names_are_declared_for_type_checkers():
+    # __init__'s `if TYPE_CHECKING:` imports name the same things as its _LAZY table.
+    import ndtrace
+
+    tree = ast.parse((PACKAGE / "__init__.py").read_text(encoding="utf-8"))
+    (block,) = [n for n in tree.body if isinstance(n, ast.If) and ast.unparse(n.test) == "_typing.TYPE_CHECKING"]
+    declared = {}
+    for node in block.body:
+        if isinstance(node, ast.Assign):  # name = module.attribute
+            (target,), value = node.targets, node.value
+            assert isinstance(target, ast.Name) and isinstance(value, ast.Attribute), ast.unparse(node)
+            declared[target.id] = (ast.unparse(value.value), value.attr)
+            continue
+        assert isinstance(node, ast.ImportFrom) and node.level == 1, ast.unparse(node)
+        for alias in node.names:
+            declared[alias.asname or alias.name] = (node.module, alias.name) if node.module else (alias.name, None)
+    assert declared == ndtrace._LAZY
+    assert sorted(m for m, attribute in ndtrace._LAZY.values() if attribute is None) == LAZY_MODULES
