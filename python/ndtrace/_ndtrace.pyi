@@ -1,7 +1,8 @@
 """Type stubs of the compiled extension. Use the ``ndtrace`` package, not this module."""
 
+from collections.abc import Callable
 from types import ModuleType
-from typing import Callable, Protocol
+from typing import Any, Protocol, final
 
 import numpy as np
 import numpy.typing as npt
@@ -72,6 +73,7 @@ rotation: _RotationKernels
 
 # -- scenes and tracing ---------------------------------------------------------------
 
+@final
 class CompiledScene:
     """A validated scene with its BVH, built once and reused by every trace."""
 
@@ -94,10 +96,10 @@ class CompiledScene:
     def trace(
         self, threads: int | None = None, callback: Callable[[int, int], object] | None = None,
         cells: tuple[int, int] | None = None,
-    ) -> dict[str, object]: ...
+    ) -> dict[str, Any]: ...
     def edge_segments(self, angle: float) -> dict[str, npt.NDArray[np.generic]]: ...
     def retina_edges(self, angle: float) -> npt.NDArray[np.float64]: ...
-    def retina_camera(self) -> dict[str, object]: ...
+    def retina_camera(self) -> dict[str, Any]: ...
 
 class _MeshReader(Protocol):
     """``reader(path, dim)`` reads a mesh file; ``reader.field(path)`` a 3D field (NIfTI)."""
@@ -117,6 +119,10 @@ def load_dict(
     reader: _MeshReader | None = None,
     like: CompiledScene | None = None,
 ) -> CompiledScene: ...
+def release_buffers() -> int:
+    """Frees the retina buffers kept for reuse by later traces (kept, up to 256 MiB, when numpy
+    frees a traced retina's arrays); returns the bytes freed."""
+
 def lendable(value: object) -> bool:
     """Whether the loader reads a numpy array's numbers in place instead of copying them: a
     C-ordered, aligned array whose numbers lie in a ``bytes`` object (``np.frombuffer`` of
@@ -150,7 +156,7 @@ def write_picture_exr(
     path: str, rgba: npt.NDArray[np.float32], depth: npt.NDArray[np.float32] | None = None
 ) -> None: ...
 def to_srgb8(rgba: npt.NDArray[np.float32], opaque: bool = False) -> npt.NDArray[np.uint8]: ...
-def read_exr(path: str) -> dict[str, object]: ...
+def read_exr(path: str) -> dict[str, Any]: ...
 
 def feature_edges(
     dim: int, vertices: npt.NDArray[np.float64], simplices: npt.NDArray[np.uint32], angle: float
@@ -179,5 +185,5 @@ def picture_edges(
     camera: dict[str, object] | None = None,
     edges: npt.NDArray[np.float64] | None = None,
 ) -> npt.NDArray[np.float64]: ...
-def composite_defaults() -> dict[str, object]: ...
+def composite_defaults() -> dict[str, Any]: ...
 def check_composite(options: dict[str, object], name: str) -> None: ...

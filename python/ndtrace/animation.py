@@ -17,19 +17,32 @@ from __future__ import annotations
 
 import os
 import tempfile
-from typing import Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
+from . import _ndtrace
+from ._dask import render_frames
+from ._description import plain_scene, scene_reader
+from ._optional import need
 from .composite import composite as _composite, scene_options
 from .files import to_srgb8, write_png
 from .retina import trace
-from .scene import Scene, _reanimated, load_dict
+from .scene import Scene, load_dict
 
 __all__ = ["animate", "frame_scene", "frame_paths", "gif_frame_ms", "render_frame",
            "GIF_MEMORY_LIMIT"]
 
 VIDEOS = ("gif", "mp4", None)
+
+
+def _reanimated(scene: Scene, data: dict) -> Scene:
+    """``data`` — ``scene``'s description with another ``[animation]`` table — as a scene that
+    shares ``scene``'s build when nothing else differs (else built anew, as :func:`load_dict`)."""
+    compiled = _ndtrace.load_dict(plain_scene(data, "<dict>"), "<dict>", scene._base, scene_reader,
+                                  scene.compiled())
+    return Scene._from_compiled(compiled, scene._base)
 
 
 def _table(scene: Scene, animation: dict | None, frames: int | None) -> Scene:
@@ -93,12 +106,9 @@ def _video_kind(output: str, video: str | None) -> str | None:
     kind = ext[1:] if ext != ".png" else video
     if kind == "mp4":
         try:
-            import imageio_ffmpeg  # noqa: F401
-        except ImportError:
-            raise ValueError(
-                "MP4 output needs imageio-ffmpeg (pip install imageio-ffmpeg); "
-                "write a .gif or numbered .png frames instead"
-            ) from None
+            need("imageio_ffmpeg", extra="video", what="MP4 output", package="imageio-ffmpeg")
+        except ImportError as e:
+            raise ValueError(f"{e}; write a .gif or numbered .png frames instead") from None
     folder = os.path.dirname(os.path.abspath(output))
     if not os.path.isdir(folder):
         raise ValueError(f"output {output}: folder {folder} does not exist")
@@ -126,7 +136,7 @@ class _Video:
         fd, self.tmp = tempfile.mkstemp(prefix=".ndtrace-", suffix="." + kind, dir=folder)
         os.close(fd)
         self.frames: list = []  # GIF: palette images
-        self.writer = None  # MP4: imageio-ffmpeg's generator
+        self.writer: Any = None  # MP4: imageio-ffmpeg's generator
         self.size: tuple[int, int] | None = None
 
     def add(self, rgb: np.ndarray) -> None:
@@ -263,9 +273,8 @@ def animate(
 
     try:
         if client is not None:
-            from .cluster import render_frames
-
-            render_frames(animated, count, client, threads, options, cells, progress, write)
+            render_frames(animated, count, client, threads, options, cells, progress, write,
+                          render_frame)
         else:
             for k in range(count):
                 tick = None if progress is None else (lambda done, _total, k=k: progress(k * cells + done, count * cells))

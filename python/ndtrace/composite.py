@@ -8,32 +8,19 @@ defaults and allowed ranges are declared and checked once, there.
 from __future__ import annotations
 
 import numbers
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
 from . import _ndtrace
-from .files import c_array
+from ._description import plain
+from ._util import float32_array
 from .retina import Retina
-from .scene import _plain
 
 __all__ = ["composite", "scene_options", "MODES", "PROJECTIONS"]
 
 MODES: tuple[str, ...] = tuple(_ndtrace.COMPOSITE_MODES)
 PROJECTIONS: tuple[str, ...] = tuple(_ndtrace.PROJECTIONS)
-
-
-def _array(name: str, value) -> np.ndarray:
-    a = np.asarray(value)
-    if a.dtype == object or not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)
-                                 or a.dtype == np.bool_):
-        raise ValueError(f"{name}: expected a real numeric array, got dtype {a.dtype}")
-    if a.dtype.kind == "f" and a.dtype.itemsize > 4:
-        # Values beyond float32's range would become inf in the cast (NaN pictures).
-        big = np.flatnonzero(np.isfinite(a) & (np.abs(a.astype(np.float64)) > np.finfo(np.float32).max))
-        if big.size:
-            raise ValueError(f"{name}: value {a.flat[big[0]]} at index {big[0]} overflows float32")
-    return c_array(a, np.float32)
 
 
 def composite(
@@ -170,12 +157,12 @@ def composite(
     Raises ValueError naming the argument on bad input.
     """
     if isinstance(retina, Retina):
-        rgba = _array("retina.rgba", retina.rgba)
-        depth = _array("retina.depth", retina.depth)
+        rgba = float32_array("retina.rgba", retina.rgba)
+        depth = float32_array("retina.depth", retina.depth)
     else:
         if isinstance(retina, (str, bytes)) or retina is None:
             raise ValueError(f"retina: expected an ndtrace.Retina or an rgba array, got {type(retina).__name__}")
-        rgba = _array("retina", retina)
+        rgba = float32_array("retina", retina)
         depth = None
     if rgba.ndim < 2 or rgba.shape[-1] != 4:
         raise ValueError(f"retina: expected rgba of shape (..., 4) with 1 to 7 retina axes, got {rgba.shape}")
@@ -207,11 +194,11 @@ def composite(
         options["edge_color"] = edge_color
     normal = camera = lines = None
     if isinstance(retina, Retina) and mode == "illustrative" and len(shape) >= 3:
-        normal = _array("retina.normal", retina.normal)
+        normal = float32_array("retina.normal", retina.normal)
         camera = retina._camera_info()
         if edges:
             lines = retina._edges(crease_angle)
-    return _ndtrace.composite(rgba, depth, _plain(options), threads, normal, camera, lines)
+    return _ndtrace.composite(rgba, depth, plain(options), threads, normal, camera, lines)
 
 
 def scene_options(description: dict) -> dict:

@@ -37,14 +37,22 @@ Example (the (3, 5) torus knot with its closed minimal-length quaternion frame, 
 from __future__ import annotations
 
 import numbers
-from typing import Callable, Literal
+from collections.abc import Callable
+from typing import Literal
 
 import numpy as np
 
 from . import _ndtrace, geometry
-from .geometry import _array
-from .rotation import (frame, matrix_to_quat, quat_conjugate, quat_multiply, quat_to_matrix,
-                       rotation_between, slerp)
+from ._util import finite_float64
+from .rotation import (
+    frame,
+    matrix_to_quat,
+    quat_conjugate,
+    quat_multiply,
+    quat_to_matrix,
+    rotation_between,
+    slerp,
+)
 
 _k = _ndtrace.rotation
 
@@ -92,7 +100,7 @@ def _frame(T, N, B) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     orthonormal and right-handed, B = T × N — with the check of ``ndtrace.rotation``."""
     arrays = []
     for name, a in (("T", T), ("N", N), ("B", B)):
-        a = _array(name, a, 2, "(n, 3)")
+        a = finite_float64(name, a, 2, "(n, 3)")
         if a.ndim != 2 or a.shape[1] != 3 or a.shape[0] < 2:
             raise ValueError(f"{name}: expected shape (n, 3) with n ≥ 2, got {a.shape}")
         arrays.append(a)
@@ -110,7 +118,7 @@ def _frame(T, N, B) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _quaternions(name: str, q) -> np.ndarray:
     """A finite float64 (n, 4) array of unit quaternions (``rotation.UNIT_TOLERANCE``), n ≥ 2."""
-    q = _array(name, q, 2, "(n, 4)")
+    q = finite_float64(name, q, 2, "(n, 4)")
     if q.ndim != 2 or q.shape[1] != 4 or q.shape[0] < 2:
         raise ValueError(f"{name}: expected shape (n, 4) with n ≥ 2, got {q.shape}")
     _k.check_units(name, np.ascontiguousarray(q).reshape(-1), 4, "quaternion")
@@ -118,13 +126,15 @@ def _quaternions(name: str, q) -> np.ndarray:
 
 
 def _positive(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value <= 0:
+    # (np.isfinite refuses some Reals, e.g. a Fraction, with a TypeError; numpy's stubs say so.)
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or not np.isfinite(value) or value <= 0:  # type: ignore[call-overload]
         raise ValueError(f"{name}: expected a finite number > 0, got {value!r}")
     return float(value)
 
 
 def _count(name: str, value, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not low <= value < 2**32:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not low <= int(value) < 2**32:
         raise ValueError(f"{name}: expected an integer in {low}..{2**32 - 1}, got {value!r}")
     return int(value)
 
@@ -181,8 +191,8 @@ def minimal_rotation(a, b, v) -> np.ndarray:
     T_{i+1}") and, with a fixed ``a``, the course's geodesic reference ``R(ẑ·T̂, ẑ × T̂)``.
     Antiparallel a, b (``1 + a·b ≤ ANTIPARALLEL_TOL``), where the minimal rotation is not
     unique: ValueError."""
-    a, b = _array("a", a, 1, "(..., N)"), _array("b", b, 1, "(..., N)")
-    v = _array("v", v, 1, "(..., N)")
+    a, b = finite_float64("a", a, 1, "(..., N)"), finite_float64("b", b, 1, "(..., N)")
+    v = finite_float64("v", v, 1, "(..., N)")
     if not a.shape[-1] == b.shape[-1] == v.shape[-1]:
         raise ValueError(f"a, b, v: expected vectors of the same length N, got shapes "
                          f"{a.shape}, {b.shape}, {v.shape}")
@@ -254,7 +264,7 @@ def parallel_transport(points, closed: bool = False, normal=None):
     if normal is None:
         n0 = frame(T[:1])[:, 1]  # the coordinate axis least aligned with T_0, orthogonalized
     else:
-        v = _array("normal", normal, 1, "(3,)")
+        v = finite_float64("normal", normal, 1, "(3,)")
         if v.shape != (3,):
             raise ValueError(f"normal: expected 3 finite numbers, got shape {v.shape}")
         w = v - np.dot(v, T[0]) * T[0]
@@ -274,7 +284,7 @@ def geodesic_reference(points, reference=None, closed: bool = False):
     naming the sample: choose another reference)."""
     p = _curve("points", points, (3,), closed)
     T = tangents(p, closed)
-    z = np.array([0.0, 0.0, 1.0]) if reference is None else _array("reference", reference, 1, "(3,)")
+    z = np.array([0.0, 0.0, 1.0]) if reference is None else finite_float64("reference", reference, 1, "(3,)")
     if z.shape != (3,) or not np.linalg.norm(z) > 0:
         raise ValueError(f"reference: expected a finite non-zero 3-vector, got {reference!r}")
     z = z / np.linalg.norm(z)
@@ -390,7 +400,7 @@ def tait_matrix(k1, k2, sigma) -> np.ndarray:
     matrix printed in the notes uses another ordering of the frame and does not.)
 
     k1, k2, σ are finite numbers or arrays whose shapes broadcast → (..., 4, 4)."""
-    args = [(name, _array(name, x, 0, "() or (...)")) for name, x in (("k1", k1), ("k2", k2), ("sigma", sigma))]
+    args = [(name, finite_float64(name, x, 0, "() or (...)")) for name, x in (("k1", k1), ("k2", k2), ("sigma", sigma))]
     try:
         k1, k2, sigma = np.broadcast_arrays(*(a for _, a in args))
     except ValueError:
@@ -445,10 +455,10 @@ def tait(q0, k1, k2, sigma, s) -> np.ndarray:
     (``rotation.UNIT_TOLERANCE``); it is normalized before integrating.
 
     σ = 0 gives parallel transport; k2 = 0, k1 = κ, σ = τ gives the Frenet frame."""
-    s = _array("s", s, 1, "(n,)")
+    s = finite_float64("s", s, 1, "(n,)")
     if s.ndim != 1 or len(s) < 2 or np.any(np.diff(s) <= 0):
         raise ValueError("s: expected at least 2 finite, strictly increasing arclengths")
-    q = _array("q0", q0, 1, "(4,)")
+    q = finite_float64("q0", q0, 1, "(4,)")
     if q.shape != (4,):
         raise ValueError(f"q0: expected a unit quaternion (4,), got shape {q.shape}")
     _k.check_units("q0", np.ascontiguousarray(q), 4, "quaternion")
@@ -481,7 +491,7 @@ def frame_curvatures(T, N, B, s, closed: bool = False):
     the frame to second order in the sample spacing."""
     T, N, B = _frame(T, N, B)
     n = len(T)
-    s = _array("s", s, 1, f"({n + 1 if closed else n},)")
+    s = finite_float64("s", s, 1, f"({n + 1 if closed else n},)")
     if s.shape != (n + 1 if closed else n,) or np.any(np.diff(s) <= 0):
         raise ValueError(f"s: expected {n + 1 if closed else n} increasing arclengths, got shape {s.shape}")
     q = frame_quaternions(T, N, B)
@@ -577,7 +587,7 @@ def icosphere(subdivisions: int = 0):
     for _ in range(subdivisions):
         mid: dict[tuple[int, int], int] = {}
 
-        def middle(x: int, y: int) -> int:
+        def middle(x: int, y: int, mid: dict[tuple[int, int], int] = mid) -> int:
             key = (min(x, y), max(x, y))
             if key not in mid:
                 mid[key] = len(verts)

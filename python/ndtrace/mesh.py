@@ -40,6 +40,8 @@ import warnings
 import numpy as np
 
 from . import _ndtrace
+from ._optional import need
+from ._util import angle_degrees, field_array
 from .geometry import generalized_cross
 from .thicken import thicken_points, thicken_surface
 
@@ -49,20 +51,6 @@ __all__ = ["convex_hull", "orient", "feature_edges", "read", "read_field", "from
 #: The meshio cell types that hold the (N−1)-simplices of a dimension-N scene ("quad" cells are
 #: split into two triangles).
 CELL_TYPES: dict[int, tuple[str, ...]] = {2: ("line",), 3: ("triangle", "quad"), 4: ("tetra",)}
-
-_MESH_EXTRA = 'pip install "ndtrace[mesh]"'
-
-
-def _needs(package: str, what: str):
-    return _needs_extra(package, what, _MESH_EXTRA)
-
-
-def _needs_extra(package: str, what: str, extra: str):
-    try:
-        return __import__(package)
-    except ImportError:
-        raise ImportError(f"{what} needs {package}: {extra}") from None
-
 
 def _vertices(name: str, vertices, dim: int | None = None) -> np.ndarray:
     v = np.asarray(vertices)
@@ -171,7 +159,7 @@ def convex_hull(points) -> tuple[np.ndarray, np.ndarray]:
     n = p.shape[1]
     if len(p) < n + 1:
         raise ValueError(f"points: a hull in R^{n} needs at least {n + 1} points, got {len(p)}")
-    _needs("scipy", "ndtrace.mesh.convex_hull")
+    need("scipy", extra="mesh", what="ndtrace.mesh.convex_hull")
     from scipy.spatial import ConvexHull, QhullError
 
     try:
@@ -305,38 +293,12 @@ def read(path: str | os.PathLike, dim: int | None = None) -> tuple[np.ndarray, n
                 raise ValueError(f"{path}: the .npz has no array named {missing[0]!r} "
                                  f"(arrays: {', '.join(z.files) or 'none'})")
             return _mesh(z["vertices"], z["simplices"], dim)
-    meshio = _needs("meshio", f"reading {ext or 'extensionless'} mesh files")
+    meshio = need("meshio", extra="mesh", what=f"reading {ext or 'extensionless'} mesh files")
     try:
         m = meshio.read(path)
     except Exception as e:  # noqa: BLE001 - meshio raises many kinds; say which file
         raise ValueError(f"{path}: meshio cannot read it: {e}") from None
     return _from_cells(m.points, m.cells, dim, path)
-
-
-class _SceneReader:
-    """What the scene loaders call for a file the core does not read itself: ``reader(path,
-    dim)`` for a mesh (meshio formats) and ``reader.field(path)`` for an elevation map's NIfTI
-    field. Errors become scene errors naming the field and the file."""
-
-    @staticmethod
-    def _strip(path: str, e: Exception) -> str:
-        message = str(e)
-        return message[len(path) + 2:] if message.startswith(path + ": ") else message
-
-    def __call__(self, path: str, dim: int) -> tuple[np.ndarray, np.ndarray]:
-        try:
-            return read(path, dim)
-        except ValueError as e:
-            raise ValueError(self._strip(path, e)) from None
-
-    def field(self, path: str) -> np.ndarray:
-        try:
-            return read_field(path)
-        except ValueError as e:
-            raise ValueError(self._strip(path, e)) from None
-
-
-_scene_reader = _SceneReader()
 
 
 def read_field(path: str | os.PathLike, key: str | None = None) -> np.ndarray:
@@ -349,7 +311,7 @@ def read_field(path: str | os.PathLike, key: str | None = None) -> np.ndarray:
         raise FileNotFoundError(errno.ENOENT, "no such field file", path)
     lower = path.lower()
     if lower.endswith((".nii", ".nii.gz")):
-        nibabel = _needs_extra("nibabel", "reading NIfTI fields", 'pip install "ndtrace[nifti]"')
+        nibabel = need("nibabel", extra="nifti", what="reading NIfTI fields")
         try:
             img = nibabel.load(path)
             data = np.asanyarray(img.dataobj)
@@ -357,9 +319,9 @@ def read_field(path: str | os.PathLike, key: str | None = None) -> np.ndarray:
             raise ValueError(f"{path}: nibabel cannot read it: {e}") from None
         if data.ndim == 4 and data.shape[3] == 1:
             data = data[..., 0]
-        return _field(path, data)
+        return field_array(path, data)
     if lower.endswith(".npy"):
-        return _field(path, np.load(path, allow_pickle=False))
+        return field_array(path, np.load(path, allow_pickle=False))
     if lower.endswith(".npz"):
         with np.load(path, allow_pickle=False) as z:
             if key is None:
@@ -370,20 +332,8 @@ def read_field(path: str | os.PathLike, key: str | None = None) -> np.ndarray:
             if key not in z.files:
                 raise ValueError(f"{path}: the .npz has no array named {key!r} "
                                  f"(arrays: {', '.join(z.files) or 'none'})")
-            return _field(path, z[key])
+            return field_array(path, z[key])
     raise ValueError(f"{path}: not a field file: expected .npy, .npz, .nii or .nii.gz")
-
-
-def _field(name: str, field) -> np.ndarray:
-    f = np.asanyarray(field)
-    if isinstance(f, np.ma.MaskedArray):
-        f = f.astype(np.float64).filled(np.nan)
-    if f.dtype.kind not in "biuf":
-        raise ValueError(f"{name}: expected a numeric 3D array, got dtype {f.dtype}")
-    if f.ndim != 3:
-        raise ValueError(f"{name}: expected a 3D array indexed [x, y, z], got {f.ndim} "
-                         f"dimension{'s' if f.ndim != 1 else ''} (shape {f.shape})")
-    return np.ascontiguousarray(f, dtype=np.float64)
 
 
 def elevation_map(field, extent=None, height: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
@@ -399,7 +349,7 @@ def elevation_map(field, extent=None, height: float = 1.0) -> tuple[np.ndarray, 
     left out as holes, with a warning that counts them. Without holes vertex ``i`` is grid point
     ``np.unravel_index(i, field.shape)``; with holes, the grid points no kept cube uses are
     dropped and the others keep that order."""
-    f = _field("field", field)
+    f = field_array("field", field)
     if isinstance(height, bool) or not isinstance(height, numbers.Real):
         raise ValueError(f"height: expected a number, got {height!r}")
     box = None
@@ -423,12 +373,6 @@ def elevation_map(field, extent=None, height: float = 1.0) -> tuple[np.ndarray, 
         warnings.warn(f"field: {holes} grid cube{'s' if holes != 1 else ''} touching NaN "
                       f"values left out as holes", stacklevel=2)
     return vertices, simplices
-
-
-def _angle(angle) -> float:
-    if isinstance(angle, bool) or not isinstance(angle, numbers.Real):
-        raise ValueError(f"angle: expected a number of degrees, got {angle!r}")
-    return float(angle)
 
 
 def feature_edges(vertices, simplices, angle: float = 20.0) -> np.ndarray:
@@ -467,6 +411,6 @@ def feature_edges(vertices, simplices, angle: float = 20.0) -> np.ndarray:
         n,
         np.ascontiguousarray(v, dtype=np.float64).reshape(-1),
         np.ascontiguousarray(s, dtype=np.uint32).reshape(-1),
-        _angle(angle),
+        angle_degrees(angle),
     )
     return np.asarray(out, dtype=np.int64).reshape(-1, 2)

@@ -56,12 +56,13 @@ Conventions
 from __future__ import annotations
 
 import operator
-from typing import Literal, Sequence
+from collections.abc import Sequence
+from typing import Literal
 
 import numpy as np
 
 from . import _ndtrace
-from .geometry import _array, _broadcast, _count
+from ._util import batch_size, broadcast_batch, finite_float64
 
 _k = _ndtrace.rotation
 
@@ -126,7 +127,7 @@ def _n(name: str, n: int, shape: tuple | None = None) -> int:
 
 def _square(name: str, value) -> tuple[np.ndarray, int]:
     """A stack of square matrices (..., N, N) → (array, N)."""
-    m = _array(name, value, 2, "(..., N, N)")
+    m = finite_float64(name, value, 2, "(..., N, N)")
     if m.shape[-1] != m.shape[-2]:
         raise ValueError(f"{name}: expected shape (..., N, N), got {m.shape}")
     return m, _n(name, m.shape[-1], m.shape)
@@ -134,14 +135,14 @@ def _square(name: str, value) -> tuple[np.ndarray, int]:
 
 def _fixed(name: str, value, width: int, what: str = "") -> np.ndarray:
     """An array of shape (..., width)."""
-    a = _array(name, value, 1, f"(..., {width})")
+    a = finite_float64(name, value, 1, f"(..., {width})")
     if a.shape[-1] != width:
         raise ValueError(f"{name}: expected shape (..., {width}){what}, got {a.shape}")
     return a
 
 
 def _times(t) -> np.ndarray:
-    return _array("t", t, 0, "() or (T...)")
+    return finite_float64("t", t, 0, "() or (T...)")
 
 
 def plane(n: int, i: int, j: int, theta) -> np.ndarray:
@@ -149,19 +150,19 @@ def plane(n: int, i: int, j: int, theta) -> np.ndarray:
     (``R e_i = cos θ e_i + sin θ e_j``), θ in radians, scalar or array (...) → (..., n, n)."""
     n = _n("n", _int("n", n))
     i, j = _axis("i", i), _axis("j", j)  # the plane itself is checked by the kernel
-    th = _array("theta", theta, 0, "() or (...)")
+    th = finite_float64("theta", theta, 0, "() or (...)")
     return _k.plane(n, i, j, _c(th).reshape(-1)).reshape(th.shape + (n, n))
 
 
 def compose(rotations) -> np.ndarray:
     """The product of rotations ``(..., K, N, N)`` with the first acting first:
     ``compose([R_1, …, R_k]) = R_k ⋯ R_1`` → ``(..., N, N)``. Each must be a rotation."""
-    r = _array("rotations", rotations, 3, "(..., K, N, N)")
+    r = finite_float64("rotations", rotations, 3, "(..., K, N, N)")
     if r.shape[-1] != r.shape[-2]:
         raise ValueError(f"rotations: expected shape (..., K, N, N), got {r.shape}")
     n = _n("rotations", r.shape[-1], r.shape)
     batch, k = r.shape[:-3], r.shape[-3]
-    return _k.compose(n, k, _count(batch), _c(r).reshape(-1)).reshape(batch + (n, n))
+    return _k.compose(n, k, batch_size(batch), _c(r).reshape(-1)).reshape(batch + (n, n))
 
 
 def rolling_ball(displacement, radius: float = 1.0,
@@ -169,7 +170,7 @@ def rolling_ball(displacement, radius: float = 1.0,
     """The N-D rolling ball M_N (eq. 5) for controller displacements ``(..., N−1)`` →
     ``(..., N, N)``: turns the last axis toward the displacement direction n̂ by θ with
     ``tan θ = r/R`` (``angle="course"``) or ``θ = r/R`` (``angle="arc"``). Zero → identity."""
-    d = _array("displacement", displacement, 1, "(..., N−1)")
+    d = finite_float64("displacement", displacement, 1, "(..., N−1)")
     n = d.shape[-1] + 1
     if not (_ndtrace.MIN_DIM <= n <= _ndtrace.MAX_DIM):
         raise ValueError(
@@ -190,13 +191,13 @@ def frame(vectors) -> np.ndarray:
     ``frame([])`` and ``frame([e_0])`` are the identity and ``frame([a])[:, 1]`` is the axis
     least aligned with a. N vectors that form a left-handed frame, or dependent vectors, raise
     ValueError."""
-    v = _array("vectors", vectors, 2, "(..., K, N)")
+    v = finite_float64("vectors", vectors, 2, "(..., K, N)")
     n = _n("vectors", v.shape[-1], v.shape)
     k = v.shape[-2]
     if k > n:
         raise ValueError(f"vectors: expected shape (..., K, N) with K ≤ N, got {v.shape}")
     batch = v.shape[:-2]
-    return _k.frame(n, k, _count(batch), _c(v).reshape(-1)).reshape(batch + (n, n))
+    return _k.frame(n, k, batch_size(batch), _c(v).reshape(-1)).reshape(batch + (n, n))
 
 
 def rotation_between(a, b) -> np.ndarray:
@@ -205,10 +206,10 @@ def rotation_between(a, b) -> np.ndarray:
     orthogonal to both (``R v = v − (a + b)((a + b)·v)/(1 + a·b) + 2b(a·v)``), built as a
     product of two reflections so it is exactly orthogonal with det +1. Antipodal pairs turn by
     π in the plane of a and the coordinate axis least aligned with a."""
-    av = _array("a", a, 1, "(..., N)")
+    av = finite_float64("a", a, 1, "(..., N)")
     n = _n("a", av.shape[-1], av.shape)
     bv = _fixed("b", b, n, " to match a")
-    batch, (av, bv) = _broadcast([("a", av, 1), ("b", bv, 1)])
+    batch, (av, bv) = broadcast_batch([("a", av, 1), ("b", bv, 1)])
     return _k.rotation_between(n, av.reshape(-1), bv.reshape(-1)).reshape(batch + (n, n))
 
 
@@ -216,14 +217,14 @@ def look_at(position, target, up=None) -> np.ndarray:
     """The orientation of a ``look_at`` camera at ``position`` looking at ``target`` with
     ``up`` (N−2 vectors; one vector for N = 3; none for N = 2) — exactly what a scene's
     ``camera.look_at`` builds: columns u_1 … u_{N−1}, view, and det −1."""
-    p = _array("position", position, 1, "(N,)")
+    p = finite_float64("position", position, 1, "(N,)")
     if p.ndim != 1:
         raise ValueError(f"position: expected shape (N,), got {p.shape}")
     n = _n("position", p.shape[0], p.shape)
-    t = _array("target", target, 1, f"({n},)")
+    t = finite_float64("target", target, 1, f"({n},)")
     if t.shape != (n,):
         raise ValueError(f"target: expected shape ({n},), got {t.shape}")
-    u = np.zeros((0, n)) if up is None else _array("up", up, 1, f"({n - 2}, {n})")
+    u = np.zeros((0, n)) if up is None else finite_float64("up", up, 1, f"({n - 2}, {n})")
     if u.ndim == 1 and n == 3:
         u = u[None, :]
     if u.shape != (n - 2, n):
@@ -236,10 +237,10 @@ def slerp(a, b, t) -> np.ndarray:
     (broadcast) at ``t`` (scalar or array): constant angular speed, ``angle(a, slerp) = t·θ``
     → ``t.shape + batch + (N,)``. Antipodal pairs turn in the plane of a and the coordinate
     axis least aligned with it."""
-    av = _array("a", a, 1, "(..., N)")
+    av = finite_float64("a", a, 1, "(..., N)")
     n = _n("a", av.shape[-1], av.shape)
     bv = _fixed("b", b, n, " to match a")
-    batch, (av, bv) = _broadcast([("a", av, 1), ("b", bv, 1)])
+    batch, (av, bv) = broadcast_batch([("a", av, 1), ("b", bv, 1)])
     ts = _times(t)
     out = _k.slerp(n, av.reshape(-1), bv.reshape(-1), _c(ts).reshape(-1))
     return out.reshape(ts.shape + batch + (n,))
@@ -263,7 +264,7 @@ def from_nested_spheres(vectors: Sequence) -> np.ndarray:
     ``[v_N (..., N), …, v_2 (..., 2)]`` (each a unit vector; batch axes broadcast)."""
     if isinstance(vectors, np.ndarray) or not isinstance(vectors, (list, tuple)) or not vectors:
         raise ValueError("vectors: expected a list [v_N, v_{N−1}, …, v_2] of unit vectors")
-    first = _array("vectors[0]", vectors[0], 1, "(..., N)")
+    first = finite_float64("vectors[0]", vectors[0], 1, "(..., N)")
     n = _n("vectors[0]", first.shape[-1], first.shape)
     if len(vectors) != n - 1:
         raise ValueError(
@@ -274,7 +275,7 @@ def from_nested_spheres(vectors: Sequence) -> np.ndarray:
     for idx in range(1, n - 1):
         name = f"vectors[{idx}]"
         parts.append((name, _fixed(name, vectors[idx], n - idx), 1))
-    batch, arrays = _broadcast(parts)
+    batch, arrays = broadcast_batch(parts)
     packed = _c(np.concatenate(arrays, axis=-1))
     return _k.from_nested_spheres(n, packed.reshape(-1)).reshape(batch + (n, n))
 
@@ -283,7 +284,7 @@ def nested_slerp(R0, R1, t) -> np.ndarray:
     """Interpolates rotations ``R0``, ``R1`` ``(N, N)`` by slerping each nested-sphere vector,
     at ``t`` (scalar or array) → ``t.shape + (N, N)``; t = 0 gives R0, t = 1 gives R1."""
     a, n = _square("R0", R0)
-    b = _array("R1", R1, 2, f"({n}, {n})")
+    b = finite_float64("R1", R1, 2, f"({n}, {n})")
     if a.shape != (n, n) or b.shape != (n, n):
         raise ValueError(f"R0, R1: expected two ({n}, {n}) rotations, got {a.shape} and {b.shape}")
     ts = _times(t)
@@ -293,7 +294,7 @@ def nested_slerp(R0, R1, t) -> np.ndarray:
 def quat_multiply(a, b) -> np.ndarray:
     """Quaternion product ``a * b`` of ``(..., 4)`` arrays (scalar first), batch broadcast."""
     av, bv = _fixed("a", a, 4), _fixed("b", b, 4)
-    batch, (av, bv) = _broadcast([("a", av, 1), ("b", bv, 1)])
+    batch, (av, bv) = broadcast_batch([("a", av, 1), ("b", bv, 1)])
     return _k.quat_multiply(av.reshape(-1), bv.reshape(-1)).reshape(batch + (4,))
 
 
@@ -318,11 +319,11 @@ def matrix_to_quat(R, continuous: bool = True) -> np.ndarray:
     choice gives continuous curves on S³. So items after the first may have q0 < 0. For a batch
     of *unrelated* rotations pass ``continuous=False``: then every quaternion has q0 ≥ 0
     (rotation angle in [0, π]). A single matrix (3, 3) always gets q0 ≥ 0."""
-    m = _array("R", R, 2, "(..., 3, 3)")
+    m = finite_float64("R", R, 2, "(..., 3, 3)")
     if m.shape[-2:] != (3, 3):
         raise ValueError(f"R: expected shape (..., 3, 3), got {m.shape}")
     batch = m.shape[:-2]
-    stride = _count(batch[1:]) if (continuous and len(batch) >= 1) else 0
+    stride = batch_size(batch[1:]) if (continuous and len(batch) >= 1) else 0
     return _k.matrix_to_quat(_c(m).reshape(-1), stride).reshape(batch + (4,))
 
 
@@ -330,14 +331,14 @@ def so4_from_quaternions(q, p) -> np.ndarray:
     """The 4D rotations ``v ↦ q v p̄`` of unit quaternions ``q``, ``p`` ``(..., 4)`` →
     ``(..., 4, 4)``; with p = q: 1 at [0, 0] and ``quat_to_matrix(q)`` in the lower 3×3."""
     qv, pv = _fixed("q", q, 4), _fixed("p", p, 4)
-    batch, (qv, pv) = _broadcast([("q", qv, 1), ("p", pv, 1)])
+    batch, (qv, pv) = broadcast_batch([("q", qv, 1), ("p", pv, 1)])
     return _k.so4_from_quaternions(qv.reshape(-1), pv.reshape(-1)).reshape(batch + (4, 4))
 
 
 def quaternions_from_so4(R) -> tuple[np.ndarray, np.ndarray]:
     """The unit quaternion pairs ``(q, p)`` of 4D rotations ``(..., 4, 4)``, up to the shared
     sign, with ``so4_from_quaternions(q, p) = R``."""
-    m = _array("R", R, 2, "(..., 4, 4)")
+    m = finite_float64("R", R, 2, "(..., 4, 4)")
     if m.shape[-2:] != (4, 4):
         raise ValueError(f"R: expected shape (..., 4, 4), got {m.shape}")
     batch = m.shape[:-2]
@@ -346,7 +347,7 @@ def quaternions_from_so4(R) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _pair(name: str, qp) -> tuple[np.ndarray, np.ndarray]:
-    a = _array(name, qp, 2, "(2, 4)")
+    a = finite_float64(name, qp, 2, "(2, 4)")
     if a.shape != (2, 4):
         raise ValueError(f"{name}: expected a pair (q, p) of quaternions, shape (2, 4), got {a.shape}")
     return _c(a[0]), _c(a[1])
@@ -369,7 +370,7 @@ def arcball_4d(a0, a1, b0, b1) -> np.ndarray:
     ``so4_from_quaternions(a1 ā0, b1 b̄0)``, the rotation ``v ↦ a1 ā0 v b0 b̄1`` taking
     ``a0 b̄0`` to ``a1 b̄1`` → ``(..., 4, 4)``."""
     args = [(name, _fixed(name, v, 4), 1) for name, v in (("a0", a0), ("a1", a1), ("b0", b0), ("b1", b1))]
-    batch, (x0, x1, y0, y1) = _broadcast(args)
+    batch, (x0, x1, y0, y1) = broadcast_batch(args)
     return _k.arcball_4d(x0.reshape(-1), x1.reshape(-1), y0.reshape(-1), y1.reshape(-1)).reshape(
         batch + (4, 4)
     )

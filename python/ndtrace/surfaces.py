@@ -25,9 +25,8 @@ def _int(name: str, value, low: int) -> int:
 def grid_triangles(rows: int, cols: int, wrap_rows: bool = False, wrap_cols: bool = False) -> np.ndarray:
     """Triangles (T, 3) of a ``rows × cols`` grid of vertices numbered ``i·cols + j``, each cell
     split in two, optionally wrapped around (a cylinder or a torus)."""
-    i, j = np.meshgrid(np.arange(rows if wrap_rows else rows - 1),
-                       np.arange(cols if wrap_cols else cols - 1), indexing="ij")
-    i, j = i.ravel(), j.ravel()
+    i, j = (g.ravel() for g in np.meshgrid(np.arange(rows if wrap_rows else rows - 1),
+                                           np.arange(cols if wrap_cols else cols - 1), indexing="ij"))
     i1, j1 = (i + 1) % rows, (j + 1) % cols
     a, b, c, d = i * cols + j, i1 * cols + j, i1 * cols + j1, i * cols + j1
     return np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]).astype(np.int64)
@@ -44,7 +43,7 @@ def clifford_torus(samples: int = 48, radii=(2 ** -0.5, 2 ** -0.5)):
     return vertices, grid_triangles(n, n, True, True)
 
 
-def _trefoil_arc(samples: int) -> np.ndarray:
+def _trefoil_arc(samples: int) -> tuple[np.ndarray, float]:
     """A knotted arc in the half-space y > −3.4 of R^3 with both ends on the plane y = −3.4:
     the trefoil (sin s + 2 sin 2s, cos s − 2 cos 2s, −sin 3s) cut open at its lowest point
     s = π, each end bent down to the plane by a cubic Hermite leg arriving perpendicularly."""

@@ -22,8 +22,9 @@ import signal
 import sys
 import threading
 import weakref
+from collections.abc import Callable
 from importlib import resources
-from typing import Callable, TextIO
+from typing import Any, TextIO
 
 from ..scene import Scene
 from .session import ViewSession
@@ -153,7 +154,7 @@ def serve(scene: Scene, *, port: int = 0, open_browser: bool = True, name: str |
     until Ctrl-C (SIGINT) or SIGTERM. Prints the page's URL, with its token, as the first line
     on ``out`` (stdout), and opens it in the browser when ``open_browser``."""
     out = out or sys.stdout
-    kwargs = {"size": size, "threads": threads, "name": name}
+    kwargs: dict[str, Any] = {"size": size, "threads": threads, "name": name}
     if draft_cells is not None:
         kwargs["draft_cells"] = draft_cells
     ViewSession(scene, **kwargs)  # the options are checked before the server starts

@@ -18,7 +18,8 @@ import io
 import math
 import time
 import tomllib
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -87,8 +88,8 @@ def display_aids() -> list[dict]:
         elif isinstance(default, str):
             # The choices: a tuple of strings in the module named after the keyword
             # (``layout`` → ``LAYOUTS``), as ``mode`` has ``MODES``.
-            choices = [getattr(_composite_module, k, None) for k in (name.upper() + "S", name.upper() + "ES", name.upper())]
-            choices = [c for c in choices if isinstance(c, tuple) and default in c and all(isinstance(v, str) for v in c)]
+            named = [getattr(_composite_module, k, None) for k in (name.upper() + "S", name.upper() + "ES", name.upper())]
+            choices = [c for c in named if isinstance(c, tuple) and default in c and all(isinstance(v, str) for v in c)]
             aid.update(kind="choice", choices=list(choices[0])) if choices else aid.update(kind="text")
         else:
             aid["kind"] = "text"
