@@ -16,6 +16,7 @@
 /// `$then` is a path in parentheses (`($crate::some_macro)` from inside an exported macro).
 ///
 /// ```
+/// # // Run by `dim::tests::the_doc_examples_hold`.
 /// macro_rules! count {
 ///     ($what:literal ; $($n:literal $variant:ident),*) => {
 ///         ($what, [$($n),*].len())
@@ -75,6 +76,7 @@ pub fn check_dim(dim: usize) -> crate::NdResult<usize> {
 /// `Err(NdError::Dimension)` otherwise.
 ///
 /// ```
+/// # // Run by `dim::tests::the_doc_examples_hold`.
 /// use ndtrace::with_dim;
 /// let n: usize = 5;
 /// let zeros = with_dim!(n, N => [0.0f64; N].len()).unwrap();
