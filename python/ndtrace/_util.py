@@ -4,7 +4,8 @@ aligned, one dtype), with errors that name the argument at fault.
 Each helper has one meaning, said by its name: :func:`finite_float64` is the input check of the
 geometry and rotation kernels, :func:`float32_array` the compositor's (which takes inf and NaN),
 :func:`picture_array` and :func:`picture_pixels` those of pictures, :func:`field_array` that of
-a scalar field.
+a scalar field, :func:`check_memory` the memory guard's check of an allocation before it is
+made.
 """
 
 from __future__ import annotations
@@ -16,7 +17,15 @@ import numpy as np
 from . import _ndtrace
 
 __all__ = ["c_array", "finite_float64", "broadcast_batch", "batch_size", "float32_array",
-           "picture_array", "picture_pixels", "field_array", "angle_degrees"]
+           "picture_array", "picture_pixels", "field_array", "angle_degrees", "check_memory"]
+
+
+def check_memory(nbytes: float, what: str) -> None:
+    """Refuses, before it is made, an allocation of about ``nbytes`` whose size comes from the
+    input: a ValueError of one line naming ``what`` and the limit (the core's memory guard,
+    ``NDTRACE_MEMORY_LIMIT``, ``ulimit -v``, the cgroup, free memory) instead of numpy's
+    MemoryError or the kernel's OOM killer."""
+    _ndtrace.check_memory(float(nbytes), what)
 
 
 def c_array(a, dtype=None) -> np.ndarray:
@@ -88,6 +97,9 @@ def picture_array(name: str, image) -> np.ndarray:
         raise ValueError(f"{name}: expected an image of shape (H, W, 4), got {a.shape}")
     if a.dtype.kind not in "biuf":
         raise ValueError(f"{name}: expected real numbers, got dtype {a.dtype}")
+    # A float32 copy, the finiteness mask and the 8-bit pixels made from it.
+    check_memory(a.shape[0] * a.shape[1] * 4 * (4 + 1 + 1 + 4.0),
+                 f"{name}: a picture of {a.shape[1]} × {a.shape[0]} pixels")
     a = c_array(a, np.float32)
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: the image holds NaN or infinite values")

@@ -25,6 +25,7 @@ import traceback
 
 from . import _ndtrace
 from ._command import ScriptError as ScriptError, UsageError, apply_sets, ints, load_scene
+from ._description import plain
 from ._ndtrace import __version__
 from ._optional import install
 from .animation import animate, write_frames
@@ -313,6 +314,13 @@ def run(argv: list[str] | None = None) -> int:
 
     if animating and scene.to_dict().get("animation") is None:
         raise UsageError(f"{args.scene}: the scene has no [animation] table to render frames of")
+    # The picture (or a turntable's frames) checked by the memory guard before anything is
+    # traced: a refusal names --size or --turntable's key and the limit.
+    picture = {k: v for k, v in _picture_options(scene, args.transparent).items() if k != "background"}
+    if not animating:
+        _ndtrace.check_picture_memory(list(scene.retina_shape), plain(picture))
+    else:
+        _ndtrace.check_picture_memory(list(scene.retina_shape), plain(dict(picture, turntable=0)))
     if args.dask:
         try:
             distributed_module()
