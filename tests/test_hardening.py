@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import ndtrace
-from ndtrace import _ndtrace, surfaces
+from ndtrace import _ndtrace, mesh, surfaces
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, "scenes")
@@ -102,6 +102,92 @@ def test_the_command_refuses_a_huge_picture_or_turntable_before_tracing(tmp_path
         assert "needs about" in line and "NDTRACE_MEMORY_LIMIT" in line, line
         assert line.startswith("ndtrace: error: " + ("turntable:" if "--turntable" in flags else "size:")), line
         assert not out.exists()
+
+
+# -- 3. fields and meshes read header first ----------------------------------------------------
+
+@pytest.fixture(scope="module")
+def zeros_640(tmp_path_factory):
+    """The issue's reproducer: a 9 MB .npz of 640³ float64 zeros (2 GiB inflated)."""
+    path = tmp_path_factory.mktemp("big") / "zeros.npz"
+    zeros_npz(path, {"field": ((640, 640, 640), "<f8")})
+    return path
+
+
+def test_a_deflated_field_is_refused_from_its_header_before_it_is_inflated(zeros_640, tmp_path):
+    scene = tmp_path / "field.toml"
+    scene.write_text(f'dim = 4\n{CAMERA_4D}[[objects]]\nshape = "elevation"\nfield = "{zeros_640}"\n')
+    # Under a 3 GiB address-space limit the old reader aborted in the allocator; without one it
+    # refused only after a peak of 4 GB. Now: a refusal, and the peak stays far below the array.
+    p = run_python(f"""
+        import resource, ndtrace
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+        for read in (lambda: ndtrace.load_file({str(scene)!r}), lambda: ndtrace.mesh.read_field({str(zeros_640)!r})):
+            try:
+                read()
+            except ValueError as e:
+                print("refused:", e)
+        # VmHWM: this process's own peak (ru_maxrss can carry the parent's from before exec).
+        hwm = next(line for line in open("/proc/self/status") if line.startswith("VmHWM:"))
+        print("peak MiB:", int(hwm.split()[1]) // 1024)
+    """, env={"NDTRACE_MEMORY_LIMIT": "1G"})
+    assert p.returncode == 0, p.stderr
+    lines = p.stdout.splitlines()
+    assert len(lines) == 3, p.stdout + p.stderr
+    for line in lines[:2]:
+        assert str(zeros_640) in line and "shape (640, 640, 640) (<f8) needs about" in line, line
+        assert "half of the 1.0 GiB allowed by NDTRACE_MEMORY_LIMIT" in line, line
+    assert lines[0].startswith("refused: field.toml: objects[0].field: ") or "objects[0].field" in lines[0]
+    assert int(lines[2].split()[-1]) < 600, lines[2]
+
+
+def test_a_mesh_npz_is_checked_by_the_guard_before_it_is_inflated(tmp_path, limit):
+    path = tmp_path / "big.npz"
+    zeros_npz(path, {"vertices": ((1 << 23, 4), "<f8"), "simplices": ((4, 4), "<i8")})
+    description = scene(4, {"shape": "mesh", "file": str(path)})
+    with pytest.raises(ValueError, match=r'objects\[0\]\.file: .*big\.npz: array "vertices": reading an array '
+                                         r"of shape \(8388608, 4\) \(<f8\) needs about .* NDTRACE_MEMORY_LIMIT"):
+        ndtrace.load_dict(description)
+    with pytest.raises(ValueError, match=r'big\.npz: array "vertices": reading an array of shape'):
+        mesh.read(path)
+
+
+# -- 8. an .npz member whose CRC-32 does not match ----------------------------------------------
+
+def test_an_npz_member_with_a_wrong_crc_is_refused(tmp_path):
+    v, s = ndtrace.mesh.convex_hull(np.array(np.meshgrid(*[[0.0, 1.0]] * 4)).reshape(4, -1).T)
+    good = tmp_path / "good.npz"
+    np.savez(good, vertices=v, simplices=s)  # stored, not deflated: the data lie as they are
+    data = bytearray(good.read_bytes())
+    at = data.index(np.asarray(v, "<f8").tobytes()[:16]) + 8 * 5  # inside vertices' numbers
+    data[at] ^= 0x40
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(bytes(data))
+    ndtrace.load_dict(scene(4, {"shape": "mesh", "file": str(good)}))
+    with pytest.raises(ValueError, match=r'objects\[0\]\.file: .*bad\.npz: array "vertices": .*Invalid checksum'):
+        ndtrace.load_dict(scene(4, {"shape": "mesh", "file": str(bad)}))
+    with pytest.raises(ValueError, match=r"bad\.npz: .*Invalid checksum"):
+        mesh.read(bad)
+
+
+# -- 4, 9. meshio and nibabel wrapped ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name, content", [
+    ("truncated.npz", b"PK\x03\x04\x14\x00\x00\x00"),  # zipfile: BadZipFile
+    ("empty.npy", b""),  # numpy: EOFError
+    ("huge.npy", b"\x93NUMPY\x01\x00v\x00{'descr': '<f8', 'fortran_order': False, 'shape': (4000000000, 4000000000), }"
+                 + b" " * 41 + b"\n"),  # numpy: MemoryError / ValueError
+])
+def test_field_and_mesh_files_raise_value_errors_naming_the_file(tmp_path, name, content):
+    path = tmp_path / name
+    path.write_bytes(content)
+    for read in (mesh.read_field, mesh.read):
+        if read is mesh.read and name.endswith(".npy"):
+            continue
+        with pytest.raises(ValueError) as e:
+            read(path)
+        assert str(path) in str(e.value) and "\n" not in str(e.value), e.value
 
 
 # -- smaller items -------------------------------------------------------------------------------

@@ -130,6 +130,7 @@ def lendable(value: object) -> bool:
 
 # -- meshes ---------------------------------------------------------------------------
 
+def read_array(path: str, name: str | None = None) -> tuple[npt.NDArray[np.float64], str]: ...
 def orient_flips(
     vertices: npt.NDArray[np.float64], simplices: npt.NDArray[np.uint32]
 ) -> npt.NDArray[np.bool_]: ...

@@ -276,23 +276,34 @@ def from_object(obj, dim: int | None = None) -> tuple[np.ndarray, np.ndarray]:
                     f"{type(obj).__name__}")
 
 
+def _npz_array(path: str, name: str | None) -> tuple[np.ndarray, str]:
+    """An array of an ``.npy`` or ``.npz`` file read by the core's reader (the one the scene
+    loaders use): header first, the memory its shape needs checked by the guard before the data
+    is read or inflated, an archive member's CRC-32 checked; ``(float64 array, stored dtype)``.
+    Every problem is a ValueError naming the file."""
+    return _ndtrace.read_array(path, name)
+
+
 def read(path: str | os.PathLike, dim: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Reads a mesh file into ``(vertices, simplices)``: an ``.npz`` with arrays ``vertices``
     (V, N) and ``simplices`` (S, N), or any file meshio reads (see the module docs), for a
     scene of dimension ``dim`` (None: from the file). Raises FileNotFoundError for a missing
     file, ImportError naming the ``mesh`` extra when meshio is needed and missing, and
-    ValueError for a file that holds no mesh of that dimension."""
+    ValueError naming the file for a file that holds no mesh of that dimension, or an .npz that
+    cannot be read (broken, or too big for the memory guard)."""
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise FileNotFoundError(errno.ENOENT, "no such mesh file", path)
     ext = os.path.splitext(path)[1].lower()
     if ext == ".npz":
-        with np.load(path) as z:
-            missing = [k for k in ("vertices", "simplices") if k not in z.files]
-            if missing:
-                raise ValueError(f"{path}: the .npz has no array named {missing[0]!r} "
-                                 f"(arrays: {', '.join(z.files) or 'none'})")
-            return _mesh(z["vertices"], z["simplices"], dim)
+        vertices, _ = _npz_array(path, "vertices")
+        simplices, dtype = _npz_array(path, "simplices")
+        if np.dtype(dtype).kind not in "iu":
+            raise ValueError(f"{path}: simplices: expected integer vertex indices, got dtype "
+                             f"{np.dtype(dtype)}")
+        if simplices.size and not np.all(np.abs(simplices) < 2.0**53):
+            raise ValueError(f"{path}: simplices: vertex indices out of range")
+        return _mesh(vertices, simplices.astype(np.int64), dim)
     meshio = need("meshio", extra="mesh", what=f"reading {ext or 'extensionless'} mesh files")
     try:
         m = meshio.read(path)
@@ -305,7 +316,8 @@ def read_field(path: str | os.PathLike, key: str | None = None) -> np.ndarray:
     """Reads a 3D scalar field, indexed ``[x, y, z]``, as a float64 array: ``.npy``, ``.npz``
     (the array ``key``, or its only array) or NIfTI ``.nii`` / ``.nii.gz`` through nibabel
     (``pip install "ndtrace[nifti]"``; the voxel array as stored, its affine ignored). Raises
-    FileNotFoundError for a missing file, ImportError naming the extra, ValueError otherwise."""
+    FileNotFoundError for a missing file, ImportError naming the extra, ValueError naming the
+    file otherwise (including a field too big for the memory guard)."""
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise FileNotFoundError(errno.ENOENT, "no such field file", path)
@@ -321,18 +333,9 @@ def read_field(path: str | os.PathLike, key: str | None = None) -> np.ndarray:
             data = data[..., 0]
         return field_array(path, data)
     if lower.endswith(".npy"):
-        return field_array(path, np.load(path, allow_pickle=False))
+        return field_array(path, _npz_array(path, None)[0])
     if lower.endswith(".npz"):
-        with np.load(path, allow_pickle=False) as z:
-            if key is None:
-                if len(z.files) != 1:
-                    raise ValueError(f"{path}: the .npz holds {len(z.files)} arrays "
-                                     f"({', '.join(z.files) or 'none'}): name one with key")
-                key = z.files[0]
-            if key not in z.files:
-                raise ValueError(f"{path}: the .npz has no array named {key!r} "
-                                 f"(arrays: {', '.join(z.files) or 'none'})")
-            return field_array(path, z[key])
+        return field_array(path, _npz_array(path, key)[0])
     raise ValueError(f"{path}: not a field file: expected .npy, .npz, .nii or .nii.gz")
 
 

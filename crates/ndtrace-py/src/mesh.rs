@@ -5,8 +5,7 @@
 use crate::errors::guarded;
 use ndtrace::mesh::elevation::{self, Field};
 use ndtrace::mesh::orientation;
-use ndtrace::scene::npz::Array2;
-use ndtrace::scene::npz::ArrayNd;
+use ndtrace::scene::npz::{self, Array2, ArrayNd};
 use ndtrace::scene::MeshReader;
 use numpy::{
     PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
@@ -152,8 +151,40 @@ fn orient_flips<'py>(
     Ok(PyArray1::from_vec(py, flips))
 }
 
+/// An array of an `.npy` file, or of an `.npz` archive (the array `name`, or its only one),
+/// read by the core's reader as the scene loaders read them — header first, its size checked
+/// by the memory guard before the data is read or inflated, an archive member's CRC-32
+/// checked — as `(float64 array of the stored shape, the stored dtype, e.g. "<i8")`. Errors
+/// are ValueErrors naming the file (and the array).
+#[pyfunction]
+#[pyo3(signature = (path, name=None))]
+fn read_array<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    name: Option<String>,
+) -> PyResult<(Bound<'py, PyAny>, String)> {
+    let npz = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npz"));
+    let a = py
+        .detach(|| {
+            guarded("mesh.read_array", || {
+                Ok(if npz {
+                    npz::read_npz_array(&path, name.as_deref())
+                } else {
+                    npz::read_npy(&path)
+                })
+            })
+        })?
+        .map_err(pyo3::exceptions::PyValueError::new_err)?;
+    let array = PyArray1::from_vec(py, a.data).reshape(a.shape)?;
+    // The header writes the dtype as a Python string literal, '<i8'.
+    Ok((array.into_any(), a.dtype.trim_matches('\'').to_string()))
+}
+
 /// Adds the mesh functions.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read_array, m)?)?;
     m.add_function(wrap_pyfunction!(orient_flips, m)?)?;
     m.add_function(wrap_pyfunction!(elevation_map, m)?)?;
     Ok(())
