@@ -172,6 +172,71 @@ def test_an_npz_member_with_a_wrong_crc_is_refused(tmp_path):
 
 # -- 4, 9. meshio and nibabel wrapped ------------------------------------------------------------
 
+#: The issue's 38-byte PLY: a header that never ends (meshio read empty lines for ever).
+PLY_WITHOUT_END = b"ply\nformat ascii 1.0\nelement vertex 3\n"
+
+
+def test_a_ply_without_end_header_is_an_error_not_a_hang(tmp_path):
+    assert len(PLY_WITHOUT_END) == 38
+    path = tmp_path / "open.ply"
+    path.write_bytes(PLY_WITHOUT_END)
+    p = run_python(f"""
+        import ndtrace
+        try:
+            ndtrace.mesh.read({str(path)!r})
+        except ValueError as e:
+            print(e)
+    """, timeout=120)
+    assert p.stdout.strip() == f"{path}: not a PLY file meshio can read: no end_header line in its header " \
+                               f"(the first {mesh.PLY_HEADER_LIMIT} bytes)", p.stdout + p.stderr
+    scene = tmp_path / "ply.toml"
+    scene.write_text(f'dim = 3\n{CAMERA_3D}[[objects]]\nshape = "mesh"\nfile = "open.ply"\n')
+    line = one_line_error(cli(str(scene), "-o", str(tmp_path / "x.png"), timeout=120))
+    assert "objects[0].file" in line and "open.ply" in line and "end_header" in line, line
+
+
+@pytest.mark.parametrize("name, text", [
+    ("loop.off", b"OFF\n# only comments\n\n"),
+    ("loop.mdpa", b"Begin Nodes\n 1 0.0 0.0 0.0\n"),
+    ("loop.nas", b"BEGIN BULK\nGRID    1       0       0.0     0.0     0.0\n"),
+])
+def test_other_readers_known_to_loop_are_prechecked(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_bytes(text)
+    p = run_python(f"""
+        import ndtrace
+        try:
+            ndtrace.mesh.read({str(path)!r})
+        except ValueError as e:
+            print(e)
+    """, timeout=120)
+    assert p.stdout.startswith(f"{path}: not an") or p.stdout.startswith(f"{path}: not a "), p.stdout + p.stderr
+
+
+def test_meshio_system_exit_becomes_a_value_error_naming_the_file(tmp_path, capsys):
+    # meshio prints a reader's error, then calls sys.exit(1): a SystemExit that a script's
+    # `except Exception` does not catch, and through a scene the message was just "1".
+    path = tmp_path / "cells.vtk"
+    path.write_bytes(b"# vtk DataFile Version 4.2\nx\nASCII\nDATASET POLYDATA\nPOINTS 1 float\n0 0 0\n")
+    with pytest.raises(ValueError) as e:
+        mesh.read(path)
+    assert str(e.value).startswith(f"{path}: meshio cannot read it: ") and str(e.value) != f"{path}: meshio cannot read it: 1"
+    assert capsys.readouterr().out == ""
+    with pytest.raises(ValueError, match=r"objects\[0\]\.file: .*cells\.vtk: meshio cannot read it"):
+        ndtrace.load_dict(scene(3, {"shape": "mesh", "file": str(path)}))
+
+
+def test_ctrl_c_in_a_mesh_reader_stops_the_load(tmp_path, monkeypatch):
+    path = tmp_path / "slow.obj"
+    path.write_text("v 0 0 0\n")
+
+    def interrupted(*_args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(ndtrace._description, "read", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        ndtrace.load_dict(scene(3, {"shape": "mesh", "file": str(path)}))
+
 
 @pytest.mark.parametrize("name, content", [
     ("truncated.npz", b"PK\x03\x04\x14\x00\x00\x00"),  # zipfile: BadZipFile

@@ -14,12 +14,38 @@ use pyo3::prelude::*;
 use std::path::Path;
 
 /// A Python callable `read(path: str, dim: int) -> (vertices (V, dim) float64, simplices
-/// (S, dim) int64)`; its exceptions become the messages of scene errors.
-pub(crate) struct PyMeshReader(Py<PyAny>);
+/// (S, dim) int64)`; its exceptions become the messages of scene errors, except those that
+/// are not an `Exception` (Ctrl-C's `KeyboardInterrupt`, `SystemExit`): the first of these is
+/// kept and raised again when the load returns ([`PyMeshReader::finish`]), so that Ctrl-C
+/// during a slow read stops the command as it does anywhere else.
+pub(crate) struct PyMeshReader(Py<PyAny>, std::sync::Mutex<Option<PyErr>>);
 
 impl PyMeshReader {
     pub(crate) fn new(read: Option<Bound<'_, PyAny>>) -> Option<Self> {
-        read.map(|r| PyMeshReader(r.unbind()))
+        read.map(|r| PyMeshReader(r.unbind(), std::sync::Mutex::new(None)))
+    }
+
+    /// The message of a reader's exception; a `BaseException` that is not an `Exception` is
+    /// kept to be raised again by [`finish`](Self::finish).
+    fn message(&self, py: Python<'_>, e: PyErr) -> String {
+        if e.is_instance_of::<pyo3::exceptions::PyException>(py) {
+            return e.value(py).to_string();
+        }
+        let text = e.value(py).to_string();
+        let mut pending = self.1.lock().unwrap_or_else(|p| p.into_inner());
+        pending.get_or_insert(e);
+        format!("interrupted {text}").trim_end().to_string()
+    }
+
+    /// `result`, unless a reader was interrupted during the load: then that exception.
+    pub(crate) fn finish<T>(reader: &Option<Self>, result: PyResult<T>) -> PyResult<T> {
+        let pending = reader
+            .as_ref()
+            .and_then(|r| r.1.lock().unwrap_or_else(|p| p.into_inner()).take());
+        match pending {
+            Some(e) => Err(e),
+            None => result,
+        }
     }
 }
 
@@ -34,7 +60,7 @@ fn rows<T: numpy::Element + Copy>(a: &PyReadonlyArray2<'_, T>) -> Result<Vec<T>,
 impl MeshReader for PyMeshReader {
     fn read(&self, path: &Path, dim: usize) -> Result<[Array2; 2], String> {
         Python::attach(|py| {
-            let message = |e: PyErr| e.value(py).to_string();
+            let message = |e: PyErr| self.message(py, e);
             let out = self
                 .0
                 .bind(py)
@@ -67,7 +93,7 @@ impl PyMeshReader {
     /// `reader.field(path)` → a 3-D float64 array (NIfTI through nibabel).
     fn field(&self, path: &Path) -> Result<ArrayNd, String> {
         Python::attach(|py| {
-            let message = |e: PyErr| e.value(py).to_string();
+            let message = |e: PyErr| self.message(py, e);
             let out = self
                 .0
                 .bind(py)
