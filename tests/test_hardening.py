@@ -6,18 +6,22 @@ the viewer's part is in tests/test_viewer_server.py.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
+import socket
 import subprocess
 import sys
 import textwrap
+import threading
+import time
 import zipfile
 
 import numpy as np
 import pytest
 
 import ndtrace
-from ndtrace import _ndtrace, mesh, surfaces
+from ndtrace import _ndtrace, cluster, mesh, surfaces
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, "scenes")
@@ -253,6 +257,77 @@ def test_field_and_mesh_files_raise_value_errors_naming_the_file(tmp_path, name,
         with pytest.raises(ValueError) as e:
             read(path)
         assert str(path) in str(e.value) and "\n" not in str(e.value), e.value
+
+
+# -- 5, 11. --dask addresses ---------------------------------------------------------------------
+
+@contextlib.contextmanager
+def listening(answer: bytes | None):
+    """A TCP server on 127.0.0.1 that accepts and then says nothing (``answer`` None) or
+    answers ``answer`` to whatever it is sent (an HTTP server's reply)."""
+    server = socket.create_server(("127.0.0.1", 0))
+    server.settimeout(0.2)
+    stop = threading.Event()
+    conns = []
+
+    def serve():
+        while not stop.is_set():
+            try:
+                conn, _ = server.accept()
+            except TimeoutError:
+                continue
+            conns.append(conn)
+            if answer is not None:
+                conn.settimeout(5)
+                with contextlib.suppress(OSError):
+                    conn.recv(65536)
+                    conn.sendall(answer)
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    try:
+        yield f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    finally:
+        stop.set()
+        thread.join(5)
+        for c in conns:
+            c.close()
+        server.close()
+
+
+HTTP_400 = b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\nConnection: close\r\n\r\n"
+
+
+@pytest.mark.parametrize("answer", [None, HTTP_400], ids=["silent", "http"])
+def test_dask_at_a_server_that_is_no_scheduler_is_one_line_after_the_timeout(monkeypatch, answer):
+    pytest.importorskip("distributed")
+    monkeypatch.setattr(cluster, "CONNECT_TIMEOUT", 1.0)
+    with listening(answer) as address:
+        start = time.monotonic()
+        with pytest.raises(ValueError, match=rf"^--dask {address}: cannot reach the Dask scheduler: "
+                                             r"no Dask handshake within 1 s \(is it a Dask scheduler\?\)$"):
+            with cluster.connect(address):
+                pass
+        assert time.monotonic() - start < 30  # a hang check, not a timing
+
+
+def test_dask_at_an_http_server_from_the_command_line(tmp_path):
+    pytest.importorskip("distributed")
+    with listening(HTTP_400) as address:
+        line = one_line_error(cli(os.path.join(SCENES, "cube.toml"), "-o", str(tmp_path / "x.png"),
+                                  "--dask", address, timeout=120))
+    assert line == f"ndtrace: error: --dask {address}: cannot reach the Dask scheduler: no Dask handshake " \
+                   "within 10 s (is it a Dask scheduler?)", line
+
+
+@pytest.mark.parametrize("address", ["ucx://127.0.0.1:8786", "tls://127.0.0.1:8786", "tcp://127.0.0.1",
+                                     "tcp://:8786"])
+def test_dask_addresses_the_command_cannot_use_are_refused(tmp_path, address):
+    with pytest.raises(ValueError, match=r"expected 'local' or a scheduler address tcp://HOST:PORT"):
+        cluster.check_address(address)
+    p = cli(os.path.join(SCENES, "cube.toml"), "-o", str(tmp_path / "x.png"), "--dask", address)
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    assert "expected 'local' or a scheduler address" in p.stderr.splitlines()[-1]
 
 
 # -- smaller items -------------------------------------------------------------------------------
