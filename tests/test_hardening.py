@@ -10,6 +10,7 @@ import contextlib
 import io
 import os
 import socket
+import stat
 import subprocess
 import sys
 import textwrap
@@ -328,6 +329,73 @@ def test_dask_addresses_the_command_cannot_use_are_refused(tmp_path, address):
     p = cli(os.path.join(SCENES, "cube.toml"), "-o", str(tmp_path / "x.png"), "--dask", address)
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     assert "expected 'local' or a scheduler address" in p.stderr.splitlines()[-1]
+
+
+# -- 12. output files get the umask's mode, or the replaced file's -------------------------------
+
+def picture() -> np.ndarray:
+    p = np.zeros((4, 6, 4), np.float32)
+    p[..., 3] = 1
+    return p
+
+
+@pytest.fixture
+def umask_022():
+    old = os.umask(0o022)
+    yield
+    os.umask(old)
+
+
+def mode(path) -> int:
+    return stat.S_IMODE(os.stat(path).st_mode)
+
+
+@pytest.mark.parametrize("ext", [".png", ".jpg", ".webp", ".tif", ".exr"])
+def test_pictures_get_the_umasks_mode_or_keep_the_replaced_files(tmp_path, umask_022, ext):
+    path = tmp_path / f"p{ext}"
+    write = ndtrace.write_exr if ext == ".exr" else ndtrace.write_image
+    write(path, picture())
+    assert mode(path) == 0o644
+    os.chmod(path, 0o640)
+    write(path, picture())
+    assert mode(path) == 0o640
+    assert sorted(os.listdir(tmp_path)) == [path.name]
+
+
+def test_svg_and_animations_get_the_umasks_mode(tmp_path, umask_022):
+    scene = ndtrace.load_file(os.path.join(SCENES, "tesseract_spin.toml"))
+    svg = tmp_path / "t.svg"
+    ndtrace.write_svg(svg, ndtrace.trace(ndtrace.load_dict(dict(scene.to_dict(), animation=None) | {
+        "camera": dict(scene.to_dict()["camera"], resolution=12)})), size=(32, 32))
+    assert mode(svg) == 0o644
+    frames = np.stack([picture()] * 2)
+    from ndtrace.animation import write_frames
+
+    gif = tmp_path / "a.gif"
+    write_frames(gif, frames, 10.0)
+    assert mode(gif) == 0o644
+    os.chmod(gif, 0o600)
+    write_frames(gif, frames, 10.0)
+    assert mode(gif) == 0o600
+
+
+def test_a_long_legal_output_name_is_written(tmp_path):
+    for ext, write in ((".png", ndtrace.write_image), (".exr", ndtrace.write_exr)):
+        path = tmp_path / ("p" * (250 - len(ext)) + ext)
+        write(path, picture())
+        assert path.is_file()
+
+
+def test_an_output_that_is_a_folder_is_refused_before_any_work(tmp_path):
+    folder = tmp_path / "out.png"
+    folder.mkdir()
+    line = one_line_error(cli(os.path.join(SCENES, "cube.toml"), "-o", str(folder)))
+    assert line == f"ndtrace: error: -o {folder}: is a folder, not a file to write", line
+    with pytest.raises(IsADirectoryError, match="it is a folder"):
+        ndtrace.write_image(folder, picture())
+    (tmp_path / "d.exr").mkdir()
+    with pytest.raises(OSError, match="it is a folder"):
+        ndtrace.write_exr(tmp_path / "d.exr", picture())
 
 
 # -- smaller items -------------------------------------------------------------------------------

@@ -242,6 +242,8 @@ def _composite_flags(args: argparse.Namespace) -> dict:
 def _check_output(path: str, exts: tuple[str, ...], option: str) -> None:
     if not path.lower().endswith(exts):
         raise UsageError(f"{option} {path}: unknown extension: expected {' or '.join(exts)}")
+    if os.path.isdir(path):
+        raise UsageError(f"{option} {path}: is a folder, not a file to write")
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise UsageError(f"{option} {path}: folder {folder} does not exist")
