@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import os
 import socket
 import stat
@@ -107,6 +108,12 @@ def test_the_command_refuses_a_huge_picture_or_turntable_before_tracing(tmp_path
         assert "needs about" in line and "NDTRACE_MEMORY_LIMIT" in line, line
         assert line.startswith("ndtrace: error: " + ("turntable:" if "--turntable" in flags else "size:")), line
         assert not out.exists()
+
+
+def test_the_viewer_refuses_a_picture_that_does_not_fit(limit):
+    scene = ndtrace.load_file(os.path.join(SCENES, "tesseract.toml"))
+    with pytest.raises(ValueError, match=r"^size: a picture of 16000 × 16000 pixels needs about"):
+        ndtrace.viewer.ViewSession(scene, size=(16000, 16000))
 
 
 # -- 3. fields and meshes read header first ----------------------------------------------------
@@ -416,3 +423,25 @@ def test_generators_and_thickenings_are_checked_by_the_guard(limit):
     with pytest.raises(ValueError, match=r"^thicken_surface of 160000 vertices and 320000 triangles × "
                                          r"segments = 4096 needs about"):
         ndtrace.mesh.thicken_surface(v, t, 0.01, segments=4096)
+
+
+def test_view_threads_are_capped_like_the_commands(tmp_path):
+    proc = subprocess.Popen([sys.executable, "-m", "ndtrace", "view", os.path.join(SCENES, "cube.toml"),
+                             "--threads", "100000", "--port", "0", "--no-browser"],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().startswith("http://127.0.0.1:")
+    finally:
+        proc.send_signal(2)
+        _, err = proc.communicate(timeout=60)
+    assert f"ndtrace view: --threads 100000 capped at {4 * (os.cpu_count() or 1)}" in err, err
+    assert proc.returncode == 0 and "Traceback" not in err, err
+
+
+def test_json_of_every_reply_is_strict():
+    # (The viewer's replies: tests/test_viewer_server.py; here the helper the server uses.)
+    from ndtrace.viewer.server import encode_reply
+
+    assert json.loads(encode_reply({"type": "state", "x": 1.5})) == {"type": "state", "x": 1.5}
+    bad = json.loads(encode_reply({"type": "state", "seq": 3, "x": float("nan")}))
+    assert bad["type"] == "error" and bad["seq"] == 3 and "not JSON" in bad["message"]
