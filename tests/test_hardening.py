@@ -407,11 +407,32 @@ def test_an_output_that_is_a_folder_is_refused_before_any_work(tmp_path):
 
 # -- smaller items -------------------------------------------------------------------------------
 
+def test_an_elevation_overflow_names_the_height_not_a_transform():
+    field = np.full((3, 3, 3), 1e308)
+    with pytest.raises(ValueError) as e:
+        ndtrace.load_dict(scene(4, {"shape": "elevation", "field": field, "height": 10.0}))
+    assert "objects[0].height: height 10 × field[0, 0, 0] = 1e308 overflows float64" in str(e.value), e.value
+    assert "transform" not in str(e.value)
+    with pytest.raises(ValueError, match=r"^field: height 10 × field\[0, 0, 0\] = 1e308 overflows float64"):
+        mesh.elevation_map(field, height=10.0)
+
 
 def test_the_memory_refusal_says_the_half_it_allows(limit):
     with pytest.raises(ValueError, match=r"needs about 1\.0 GiB of memory, more than this process can spare "
                                          r"\(128\.0 MiB: half of the 256\.0 MiB allowed by NDTRACE_MEMORY_LIMIT\)$"):
         _ndtrace.check_memory(float(1 << 30), "x")
+
+
+def test_generators_refuse_non_finite_vertices():
+    with pytest.raises(ValueError, match=r"^radii: vertex 0 is \[inf"):
+        surfaces.clifford_torus(8, radii=(float("inf"), 1.0))
+    with pytest.raises(ValueError, match=r"^f, radius: vertex 0 is"):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            surfaces.complex_graph(lambda z: 1 / z, rings=2, sectors=3)
+    with pytest.raises(ValueError, match=r"^extent: vertex \d+ is"):
+        surfaces.fermat_patch(extent=1000.0)
+    with pytest.raises(ValueError, match=r"^radius: vertex \d+ is"):
+        surfaces.riemann_root(2, radius=float("inf"), rings=2, sectors=3)
 
 
 def test_generators_and_thickenings_are_checked_by_the_guard(limit):

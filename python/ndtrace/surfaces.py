@@ -36,6 +36,16 @@ def _budget(vertices: float, what: str) -> None:
     check_memory(vertices * _BYTES_PER_VERTEX, f"{what}: a surface of {vertices:.0f} vertices")
 
 
+def _finite(vertices: np.ndarray, what: str) -> np.ndarray:
+    """``vertices``, if all are finite; else a ValueError naming the arguments ``what`` that
+    made them overflow (or NaN) and the first such vertex."""
+    bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
+    if len(bad):
+        raise ValueError(f"{what}: vertex {bad[0]} is {vertices[bad[0]].tolist()}: the surface "
+                         "must be finite (a value too large, or a function that overflows)")
+    return vertices
+
+
 def grid_triangles(rows: int, cols: int, wrap_rows: bool = False, wrap_cols: bool = False) -> np.ndarray:
     """Triangles (T, 3) of a ``rows × cols`` grid of vertices numbered ``i·cols + j``, each cell
     split in two, optionally wrapped around (a cylinder or a torus)."""
@@ -54,8 +64,9 @@ def clifford_torus(samples: int = 48, radii=(2 ** -0.5, 2 ** -0.5)):
     r1, r2 = (float(x) for x in radii)
     _budget(float(n) * n, f"samples = {n}")
     u, v = np.meshgrid(2 * np.pi * np.arange(n) / n, 2 * np.pi * np.arange(n) / n, indexing="ij")
-    vertices = np.stack([r1 * np.cos(u), r1 * np.sin(u), r2 * np.cos(v), r2 * np.sin(v)], -1).reshape(-1, 4)
-    return vertices, grid_triangles(n, n, True, True)
+    with np.errstate(over="ignore", invalid="ignore"):  # refused below, naming radii
+        vertices = np.stack([r1 * np.cos(u), r1 * np.sin(u), r2 * np.cos(v), r2 * np.sin(v)], -1).reshape(-1, 4)
+    return _finite(vertices, "radii"), grid_triangles(n, n, True, True)
 
 
 def _trefoil_arc(samples: int) -> tuple[np.ndarray, float]:
@@ -133,9 +144,13 @@ def complex_graph(f, radius: float = 1.0, rings: int = 16, sectors: int = 48):
     z**2)``."""
     rings, sectors = _int("rings", rings, 1), _int("sectors", sectors, 3)
     _budget(float(rings) * sectors, f"rings × sectors = {rings} × {sectors}")
-    zeta, tri = _disk(float(radius), rings, sectors)
+    with np.errstate(over="ignore", invalid="ignore"):  # refused below, naming radius
+        zeta, tri = _disk(float(radius), rings, sectors)
     w = np.asarray(f(zeta), dtype=np.complex128)
-    return _complex_vertices(zeta, w), tri
+    if w.shape != zeta.shape:
+        raise ValueError(f"f: expected one complex value per point, an array of shape {zeta.shape}, "
+                         f"got shape {w.shape}")
+    return _finite(_complex_vertices(zeta, w), "f, radius"), tri
 
 
 def riemann_root(n: int = 2, radius: float = 1.0, rings: int = 16, sectors: int = 48):
@@ -145,8 +160,10 @@ def riemann_root(n: int = 2, radius: float = 1.0, rings: int = 16, sectors: int 
     n = _int("n", n, 1)
     rings, sectors = _int("rings", rings, 1), _int("sectors", sectors, 3)
     _budget(float(rings) * sectors * n, f"rings × sectors × n = {rings} × {sectors} × {n}")
-    zeta, tri = _disk(float(radius) ** (1 / n), rings, sectors * n)
-    return _complex_vertices(zeta**n, zeta), tri
+    with np.errstate(over="ignore", invalid="ignore"):  # refused below, naming radius
+        zeta, tri = _disk(float(radius) ** (1 / n), rings, sectors * n)
+        vertices = _complex_vertices(zeta**n, zeta)
+    return _finite(vertices, "radius"), tri
 
 
 def fermat_patch(n: int = 3, k: int = 0, l: int = 0, samples: int = 24, extent: float = 1.0):
@@ -158,6 +175,8 @@ def fermat_patch(n: int = 3, k: int = 0, l: int = 0, samples: int = 24, extent: 
     _budget(2.0 * m * m, f"samples = {m}")
     xi, eta = np.meshgrid(np.linspace(0, np.pi / 2, m), np.linspace(-extent, extent, 2 * m), indexing="ij")
     tau = xi + 1j * eta
-    z = np.exp(2j * np.pi * k / n) * np.cos(tau) ** (2 / n)
-    w = np.exp(2j * np.pi * l / n) * np.sin(tau) ** (2 / n)
-    return _complex_vertices(z.ravel(), w.ravel()), grid_triangles(m, 2 * m)
+    with np.errstate(over="ignore", invalid="ignore"):  # refused below, naming extent
+        z = np.exp(2j * np.pi * k / n) * np.cos(tau) ** (2 / n)
+        w = np.exp(2j * np.pi * l / n) * np.sin(tau) ** (2 / n)
+        vertices = _complex_vertices(z.ravel(), w.ravel())
+    return _finite(vertices, "extent"), grid_triangles(m, 2 * m)
