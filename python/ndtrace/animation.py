@@ -16,7 +16,6 @@ table drives ``ndtrace.animate``, the CLI's ``--frames`` and scripts::
 from __future__ import annotations
 
 import os
-import tempfile
 from collections.abc import Callable
 from typing import Any
 
@@ -26,6 +25,7 @@ from . import _ndtrace
 from ._dask import render_frames
 from ._description import plain_scene, scene_reader
 from ._optional import need
+from ._util import output_done, output_temp
 from .composite import composite as _composite, scene_options
 from .files import to_srgb8, write_png
 from .retina import trace
@@ -132,9 +132,7 @@ class _Video:
 
     def __init__(self, kind: str, path: str, fps: float) -> None:
         self.kind, self.path, self.fps = kind, path, fps
-        folder = os.path.dirname(os.path.abspath(path))
-        fd, self.tmp = tempfile.mkstemp(prefix=".ndtrace-", suffix="." + kind, dir=folder)
-        os.close(fd)
+        self.tmp = output_temp(path, "." + kind)
         self.frames: list = []  # GIF: palette images
         self.writer: Any = None  # MP4: imageio-ffmpeg's generator
         self.size: tuple[int, int] | None = None
@@ -166,7 +164,7 @@ class _Video:
                        duration=gif_frame_ms(self.fps), loop=0)
         else:
             self.writer.close()
-        os.replace(self.tmp, self.path)
+        output_done(self.tmp, self.path)
 
     def abort(self) -> None:
         if self.writer is not None:

@@ -24,7 +24,17 @@ import time
 import traceback
 
 from . import _ndtrace
-from ._command import ScriptError as ScriptError, UsageError, apply_sets, ints, load_scene
+from ._command import (
+    THREADS_PER_CORE as THREADS_PER_CORE,
+    ScriptError as ScriptError,
+    UsageError,
+    apply_sets,
+    capped_threads,
+    ints,
+    load_scene,
+    max_threads as max_threads,
+)
+from ._description import plain
 from ._ndtrace import __version__
 from ._optional import install
 from .animation import animate, write_frames
@@ -41,15 +51,6 @@ COMPOSITES: tuple[str, ...] = tuple(_ndtrace.COMPOSITE_MODES)  # composite.mode
 LAYOUTS = ("single", "sections", "stereo")  # composite.layout
 #: Frames per second of a turntable video.
 TURNTABLE_FPS = 12.0
-
-
-#: ``--threads`` is capped at this many threads per core: more only costs memory and start-up.
-THREADS_PER_CORE = 4
-
-
-def max_threads() -> int:
-    """The most worker threads ``--threads`` may ask for."""
-    return THREADS_PER_CORE * (os.cpu_count() or 1)
 
 
 def _terminate(signum, _frame):
@@ -241,6 +242,8 @@ def _composite_flags(args: argparse.Namespace) -> dict:
 def _check_output(path: str, exts: tuple[str, ...], option: str) -> None:
     if not path.lower().endswith(exts):
         raise UsageError(f"{option} {path}: unknown extension: expected {' or '.join(exts)}")
+    if os.path.isdir(path):
+        raise UsageError(f"{option} {path}: is a folder, not a file to write")
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise UsageError(f"{option} {path}: folder {folder} does not exist")
@@ -276,13 +279,7 @@ def run(argv: list[str] | None = None) -> int:
     if os.path.realpath(args.scene) in (os.path.realpath(args.output),
                                          os.path.realpath(args.retina or args.output)):
         raise UsageError(f"{args.scene}: an output would overwrite the scene file")
-    if args.threads is not None and args.threads < 1:
-        raise UsageError(f"--threads: must be at least 1, got {args.threads}")
-    if args.threads is not None and args.threads > max_threads():
-        if not args.quiet:
-            print(f"ndtrace: --threads {args.threads} capped at {max_threads()} "
-                  f"({THREADS_PER_CORE} per core on {os.cpu_count() or 1} cores)", file=sys.stderr)
-        args.threads = max_threads()
+    args.threads = capped_threads(args.threads, "ndtrace", args.quiet)
     for name in ("samples", "seed", "frames"):
         value = getattr(args, name)
         if value is not None and not 0 <= value < 2**32:
@@ -313,6 +310,13 @@ def run(argv: list[str] | None = None) -> int:
 
     if animating and scene.to_dict().get("animation") is None:
         raise UsageError(f"{args.scene}: the scene has no [animation] table to render frames of")
+    # The picture (or a turntable's frames) checked by the memory guard before anything is
+    # traced: a refusal names --size or --turntable's key and the limit.
+    picture = {k: v for k, v in _picture_options(scene, args.transparent).items() if k != "background"}
+    if not animating:
+        _ndtrace.check_picture_memory(list(scene.retina_shape), plain(picture))
+    else:
+        _ndtrace.check_picture_memory(list(scene.retina_shape), plain(dict(picture, turntable=0)))
     if args.dask:
         try:
             distributed_module()

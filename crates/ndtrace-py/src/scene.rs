@@ -361,11 +361,12 @@ fn load_file(
     reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
     let reader = PyMeshReader::new(reader);
-    let (desc, scene) = py.detach(|| {
+    let loaded = py.detach(|| {
         guarded("load_file", || {
             scene::load_file_with(&path, as_reader(&reader))
         })
-    })?;
+    });
+    let (desc, scene) = PyMeshReader::finish(&reader, loaded)?;
     Ok(CompiledScene { desc, scene })
 }
 
@@ -380,11 +381,12 @@ fn load_toml(
     reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
     let reader = PyMeshReader::new(reader);
-    let (desc, scene) = py.detach(|| {
+    let loaded = py.detach(|| {
         guarded("load_toml", || {
             scene::load_toml_with(text, name, base.as_deref(), as_reader(&reader))
         })
-    })?;
+    });
+    let (desc, scene) = PyMeshReader::finish(&reader, loaded)?;
     Ok(CompiledScene { desc, scene })
 }
 
@@ -418,11 +420,12 @@ fn load_dict(
             return Ok(CompiledScene { desc, scene });
         }
     }
-    let scene = py.detach(|| {
+    let built = py.detach(|| {
         guarded("load_dict", || {
             scene::build_desc_with(&desc, name, base.as_deref(), as_reader(&reader))
         })
-    })?;
+    });
+    let scene = PyMeshReader::finish(&reader, built)?;
     Ok(CompiledScene { desc, scene })
 }
 

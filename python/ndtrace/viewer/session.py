@@ -15,7 +15,9 @@ import dataclasses
 import importlib
 import inspect
 import io
+import json
 import math
+import re
 import time
 import tomllib
 from collections.abc import Callable
@@ -23,6 +25,8 @@ from typing import Any
 
 import numpy as np
 
+from .._ndtrace import check_picture_memory
+from .._util import check_memory
 from ..composite import composite, scene_options
 from ..display import camera_resolution, reduced_resolution
 from ..files import to_srgb8
@@ -31,8 +35,9 @@ from ..scene import Scene, load_dict
 from . import controls
 from .worker import DRAFT, FULL, Superseded
 
-__all__ = ["ViewSession", "Snapshot", "composite_modes", "display_aids", "BASE_KEYWORDS",
-           "DRAFT_CELLS", "DRAFT_SCALE", "DRAFT_STEP"]
+__all__ = ["ViewSession", "Snapshot", "composite_modes", "display_aids", "parse_message", "nesting",
+           "BASE_KEYWORDS", "DRAFT_CELLS", "DRAFT_SCALE", "DRAFT_STEP", "MAX_MESSAGE_BYTES",
+           "MAX_NESTING", "UNSETTABLE"]
 
 #: Retina cells of a draft frame (traced while the mouse moves): 32³ for a 4D scene.
 DRAFT_CELLS: int = 32 ** 3
@@ -53,6 +58,76 @@ BASE_KEYWORDS = frozenset({
 })
 
 _ZOOM_RANGE = (0.05, 50.0)
+
+#: The longest message a page may send (UTF-8 bytes): its messages are a few hundred bytes, a
+#: drag's batch of mouse steps a few kilobytes.
+MAX_MESSAGE_BYTES: int = 1 << 16
+
+#: The deepest nesting of lists and objects in a message, and of a TOML value in ``set`` (a
+#: rotation matrix is two levels inside the message, a cutaway's centre three).
+MAX_NESTING: int = 16
+
+#: The keywords of ``ndtrace.composite`` that ``set`` refuses: what the server decides (the
+#: picture's size, the threads), what is not one picture (a turntable's frames), the retina.
+UNSETTABLE = frozenset({"retina", "threads", "size", "turntable"})
+
+_JSON_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
+_TOML_STRING = re.compile(r'"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'')
+
+
+def nesting(text: str, strings: re.Pattern = _JSON_STRING) -> int:
+    """The deepest nesting of brackets (``[`` and ``{``) in JSON or TOML ``text``, not counting
+    those inside strings: checked before a parser that recurses sees the text."""
+    bare = strings.sub('""', text).encode("utf-8", "replace")
+    codes = np.frombuffer(bare, dtype=np.uint8)
+    if not len(codes):
+        return 0
+    step = (np.isin(codes, (0x5B, 0x7B)).astype(np.int32)
+            - np.isin(codes, (0x5D, 0x7D)).astype(np.int32))
+    return int(max(0, np.cumsum(step).max()))
+
+
+def _depth_exceeds(value: Any, limit: int) -> bool:
+    """Whether ``value`` (JSON data: dicts, lists, scalars) nests deeper than ``limit``."""
+    stack = [(value, 0)]
+    while stack:
+        v, d = stack.pop()
+        if isinstance(v, dict):
+            v = list(v.values())
+        if isinstance(v, list):
+            if d + 1 > limit:
+                return True
+            stack.extend((x, d + 1) for x in v)
+    return False
+
+
+def _refuse_constant(name: str) -> float:
+    raise ValueError(f"message: {name} is not a JSON number")
+
+
+def parse_message(text: str | bytes) -> dict:
+    """A page's message, checked before it is parsed: at most :data:`MAX_MESSAGE_BYTES` bytes,
+    lists and objects nested at most :data:`MAX_NESTING` deep, valid JSON (without NaN or
+    Infinity), an object. Anything else is a ValueError saying what is wrong."""
+    size = len(text.encode("utf-8", "replace") if isinstance(text, str) else text)
+    if size > MAX_MESSAGE_BYTES:
+        raise ValueError(f"message: {size} bytes, more than the {MAX_MESSAGE_BYTES} allowed")
+    if isinstance(text, bytes):
+        try:
+            text = text.decode("utf-8")
+        except UnicodeDecodeError:
+            raise ValueError("message: not UTF-8 text") from None
+    if nesting(text) > MAX_NESTING:
+        raise ValueError(f"message: nested more than {MAX_NESTING} levels deep")
+    try:
+        data = json.loads(text, parse_constant=_refuse_constant)
+    except RecursionError:
+        raise ValueError(f"message: nested more than {MAX_NESTING} levels deep") from None
+    except ValueError as e:  # json.JSONDecodeError is a ValueError
+        raise ValueError(f"message: not JSON: {e}") from None
+    if not isinstance(data, dict):
+        raise ValueError("message: expected an object with a 'type'")
+    return data
 
 # The module, not the function ``ndtrace.composite`` that the package's attribute names.
 _composite_module = importlib.import_module("ndtrace.composite")
@@ -112,6 +187,25 @@ def _jsonable(value: Any) -> Any:
     return repr(value)
 
 
+def _numbers(objects: Any) -> int:
+    """About how many numbers the arrays of a description's objects hold (numpy arrays by
+    their size, lists of rows by rows × the first row's length)."""
+    count = 0
+    for o in objects if isinstance(objects, list) else []:
+        for v in (o.values() if isinstance(o, dict) else []):
+            if isinstance(v, np.ndarray):
+                count += v.size
+            elif isinstance(v, list) and v:
+                first = v[0]
+                count += len(v) * (len(first) if isinstance(first, list) else 1)
+    return count
+
+
+def camera_shape(resolution: list[int]) -> list[int]:
+    """The numpy shape of a retina of ``resolution`` (retina axes u_1 … u_{N−1}): reversed."""
+    return list(reversed([int(r) for r in resolution]))
+
+
 @dataclasses.dataclass(frozen=True)
 class Snapshot:
     """What a frame shows: the object rotation and the composite options, frozen at an input."""
@@ -167,9 +261,13 @@ class ViewSession:
         self.draft_scale = float(draft_scale)
         self.threads = threads
         initial = scene_options(desc)
+        initial.pop("turntable", None)  # a view is one picture
         picture = size or initial.get("size") or (512, 512)
         self.size = (int(picture[0]), int(picture[1]))
         initial["size"] = list(self.size)
+        # The full frame's picture, checked by the memory guard before the server starts.
+        check_picture_memory(list(camera_shape(self.resolution)), {
+            k: v for k, v in _jsonable(initial).items() if k in ("size", "mode")})
         self.initial_options = initial
         self.options = dict(initial)
         self.rotation = np.eye(self.dim)
@@ -214,6 +312,8 @@ class ViewSession:
         frame now) or None. A bad message raises ValueError (the page shows it; the state is unchanged)."""
         if not isinstance(msg, dict) or not isinstance(msg.get("type"), str):
             raise ValueError("message: expected an object with a 'type'")
+        if _depth_exceeds(msg, MAX_NESTING):
+            raise ValueError(f"message: nested more than {MAX_NESTING} levels deep")
         kind = msg["type"]
         seq = msg.get("seq")
         if seq is not None:
@@ -293,17 +393,23 @@ class ViewSession:
         kinds = {a["name"]: a["kind"] for a in self.aids}
         params = _parameters()
         for key, value in given.items():
-            if key not in params or key in ("retina", "threads", "size"):
+            if key not in params or key in UNSETTABLE:
                 raise ValueError(f"set.options.{key}: not a keyword of ndtrace.composite the page can set")
             if kinds.get(key) == "text" and isinstance(value, str):
                 text = value.strip()
                 if not text:
                     options.pop(key, None)
                     continue
+                if nesting(text, _TOML_STRING) > MAX_NESTING:
+                    raise ValueError(f"{key}: nested more than {MAX_NESTING} levels deep")
                 try:
                     value = tomllib.loads(f"v = {text}")["v"]
                 except tomllib.TOMLDecodeError as e:
                     raise ValueError(f"{key}: expected a TOML value, e.g. [0, 0, 1] or {{ a = 1 }}: {e}") from None
+                except RecursionError:
+                    raise ValueError(f"{key}: nested more than {MAX_NESTING} levels deep") from None
+                if _depth_exceeds(value, MAX_NESTING):
+                    raise ValueError(f"{key}: nested more than {MAX_NESTING} levels deep")
             if value is None:
                 options.pop(key, None)
             else:
@@ -313,15 +419,18 @@ class ViewSession:
         return "draft"
 
     def _check_options(self, options: dict) -> None:
-        """Raises the composite's own ValueError for options it refuses (on a tiny retina)."""
-        if self.dim < 3:
-            return
+        """Raises the composite's own ValueError for options it refuses (on a tiny retina of
+        this scene's dimension: the same checks for every dimension), and the memory guard's
+        for a picture that would not fit."""
         shape = (2,) * (self.dim - 1)
         probe = Retina(dim=self.dim, rgba=np.zeros(shape + (4,), np.float32),
                        depth=np.full(shape, np.inf, np.float32),
                        normal=np.zeros(shape + (self.dim,), np.float32),
                        object_id=np.full(shape, -1, np.int32), primitive_id=np.full(shape, -1, np.int64))
         composite(probe, **dict(options, size=(2, 2)))
+        for key, value in options.items():
+            if isinstance(value, float) and not math.isfinite(value):  # a reply must be JSON
+                raise ValueError(f"{key}: must be finite, got {value}")
 
     def _on_rotation(self, msg: dict) -> str:
         self.rotation = controls.check_rotation(msg.get("matrix"), self.dim)
@@ -434,6 +543,10 @@ class ViewSession:
         ``{ matrix = … }`` step appended to each ``transform``) and the ``[composite]`` table of
         the page's options. ``ndtrace FILE -o out.png`` renders what the page shows (options
         that this ndtrace's ``[composite]`` table cannot hold are listed in a comment)."""
+        # The text is about 25 bytes per number of the objects' arrays, made once as TOML and
+        # once more as the JSON of the reply.
+        check_memory(_numbers(self._desc.get("objects", [])) * 25.0 * 3 + (1 << 20),
+                     "the view as TOML")
         table, refused = self.composite_table()
         scene = self.frame_scene(self.rotation, FULL, options=table)
         center = [float(c) for c in self.center]

@@ -83,6 +83,18 @@ pub fn check(field: &Field<'_>, extent: Option<&Extent>, height: f64) -> Result<
             "height must be a finite non-zero number, got {height}"
         ));
     }
+    // w = height·f must be finite too.
+    if let Some(i) = field
+        .values
+        .iter()
+        .position(|&v| v.is_finite() && !(height * v).is_finite())
+    {
+        let (x, y, z) = (i / (ny * nz), i / nz % ny, i % nz);
+        return Err(format!(
+            "height {height} × field[{x}, {y}, {z}] = {:e} overflows float64 (the elevation w = height·f must be finite)",
+            field.values[i]
+        ));
+    }
     if let Some(e) = extent {
         for (axis, [lo, hi]) in ["x", "y", "z"].iter().zip(e) {
             if !(lo.is_finite() && hi.is_finite() && hi > lo) {
