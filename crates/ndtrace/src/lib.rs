@@ -36,6 +36,7 @@ pub mod linalg;
 pub mod memory;
 pub mod mesh;
 pub mod names;
+pub mod par;
 pub mod ray;
 pub mod render;
 pub mod rotation;
