@@ -57,6 +57,10 @@ pub enum ViewLayout {
     /// azimuth − [`stereo_angle`](super::CompositeOptions::stereo_angle)/2, the right half
     /// from azimuth + stereo_angle/2.
     Stereo,
+    /// The view (left half) beside the scene's current `[slice]` (right half): `ndtrace` (the
+    /// command line) and `ndtrace.animate` trace the slice and draw it there, and mark the
+    /// slicing hyperplane in the view; the compositor alone leaves the right half background.
+    Slice,
 }
 
 impl Cutaway {

@@ -211,6 +211,13 @@ impl View3 {
                 paste(&mut img, w, &right, wr, wl, 0, wr, h);
                 img
             }
+            ViewLayout::Slice => {
+                let wl = w / 2;
+                let left = self.view(&sized(wl, h, opts.azimuth));
+                let mut img = vec![0f32; w * h * 4];
+                paste(&mut img, w, &left, wl.max(1), 0, 0, wl, h);
+                img
+            }
             ViewLayout::Sections => {
                 let (wl, wr, ht, hb) = (w / 2, w - w / 2, h / 2, h - h / 2);
                 let mut img = vec![0f32; w * h * 4];

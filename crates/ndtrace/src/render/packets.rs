@@ -106,6 +106,9 @@ impl<const N: usize> GroupTracer<N> {
         scene
             .instances
             .closest_hits(&self.rays, 0.0, f64::INFINITY, accept, &mut self.hits);
+        if scene.clips.active() {
+            super::clip::clip_hits(scene, &self.rays, accept, &mut self.hits);
+        }
         self.color.clear();
         self.nearest.clear();
         self.terms.clear();
@@ -217,6 +220,14 @@ impl<const N: usize> GroupTracer<N> {
                     &mut self.blocked[all],
                 );
                 first += run.len();
+            }
+            if scene.clips.active() {
+                // Only a ray blocked by some hit may be blocked by a kept one.
+                for (i, r) in requests.iter().enumerate() {
+                    if self.blocked[i] {
+                        self.blocked[i] = super::clip::blocks(scene, &r.2.ray, r.2.tmax, &r.2.skip);
+                    }
+                }
             }
         }
         // 4. The waiting terms, in light order per ray (the order of the sum, as for one ray

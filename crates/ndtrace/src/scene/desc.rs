@@ -61,6 +61,58 @@ pub struct SceneDesc {
     /// `ndtrace --frames`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub animation: Option<AnimationDesc>,
+    /// The hyperplane the command line and `ndtrace.animate` cut the scene with: they render
+    /// the (N−1)-dimensional slice ([`super::slice`]) instead of the scene, or beside it with
+    /// `[composite] layout = "slice"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slice: Option<SliceDesc>,
+    /// Clip hyperplanes acting on every object: rays ignore hits on their far side
+    /// ([`super::clip`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub clip: Vec<ClipDesc>,
+    /// Fill the cuts of every closed object's clip hyperplanes with its slice (an object's own
+    /// `cap` overrides it).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub cap: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+/// A clip hyperplane n̂·x = `offset` (n̂ the unit `normal`): what lies beyond it, n̂·x > offset,
+/// is not drawn.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClipDesc {
+    /// The hyperplane's normal, N numbers (need not be unit length), pointing to the side
+    /// removed.
+    pub normal: Vec<f64>,
+    /// Its signed distance from the origin along the unit normal.
+    pub offset: f64,
+}
+
+/// `[slice]`: the hyperplane n̂·x = `offset` (n̂ the unit `normal`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SliceDesc {
+    /// The hyperplane's normal, N numbers (need not be unit length).
+    pub normal: Vec<f64>,
+    /// Its signed distance from the origin along the unit normal.
+    pub offset: f64,
+}
+
+/// `[animation] slice = { normal, from, to }`: the scene swept through the hyperplane
+/// n̂·x = offset, offset linear in t from `from` to `to`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SliceSweepDesc {
+    /// The hyperplane's normal, N numbers.
+    pub normal: Vec<f64>,
+    /// The offset at t = 0.
+    pub from: f64,
+    /// The offset at t = 1.
+    pub to: f64,
 }
 
 impl SceneDesc {
@@ -76,9 +128,12 @@ impl SceneDesc {
             render,
             composite,
             animation: _,
+            slice,
+            clip,
+            cap,
         } = self;
         (
-            dim, background, ambient, camera, lights, objects, render, composite,
+            dim, background, ambient, camera, lights, objects, render, composite, slice, clip, cap,
         ) == (
             &other.dim,
             &other.background,
@@ -88,6 +143,9 @@ impl SceneDesc {
             &other.objects,
             &other.render,
             &other.composite,
+            &other.slice,
+            &other.clip,
+            &other.cap,
         )
     }
 }
@@ -130,6 +188,10 @@ pub struct AnimationDesc {
     /// A rolling-ball path.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rolling: Option<RollingPathDesc>,
+    /// A sweep of the `[slice]` hyperplane through the scene (no rotation: each frame is the
+    /// scene's slice at that offset).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slice: Option<SliceSweepDesc>,
 }
 
 fn default_frames() -> u32 {
@@ -367,6 +429,13 @@ pub struct ObjectDesc {
     /// Transforms applied in order (the first entry acts first).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub transform: Vec<TransformDesc>,
+    /// Clip hyperplanes of this object (world space), besides the scene's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub clip: Vec<ClipDesc>,
+    /// Fill the cuts of this object's clip hyperplanes (its own and the scene's) with its slice
+    /// (default: the scene's `cap`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cap: Option<bool>,
 }
 
 /// An elevation map's field: a file name, the values inline as nested lists `[x][y][z]`, or
