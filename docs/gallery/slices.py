@@ -33,24 +33,29 @@ def main() -> None:
     font = ImageFont.load_default(size=18)
     label = 30
     width = 3 * 2 * PANEL
-    sheet = Image.new("RGB", (width, len(ROWS) * (PANEL + label)), (255, 255, 255))
+    caption = 34
+    sheet = Image.new("RGB", (width, len(ROWS) * (PANEL + label) + caption), (255, 255, 255))
     draw = ImageDraw.Draw(sheet)
     for row, (file, name, offsets) in enumerate(ROWS):
         scene = ndtrace.load_file(os.path.join(SCENES, file))
         for col, c in enumerate(offsets):
-            picture = Image.fromarray(to_srgb8(pair(scene, c))[..., :3])
+            picture = Image.fromarray(to_srgb8(pair(scene, c), opaque=True))
             x, y = col * 2 * PANEL, row * (PANEL + label)
             sheet.paste(picture, (x, y + label))
             draw.text((x + 8, y + 6), f"{name}, w = {c:g}: 4D projection | its 3D slice",
                       fill=(0, 0, 0), font=font)
             draw.line([(x + PANEL, y + label), (x + PANEL, y + label + PANEL)],
                       fill=(255, 255, 255), width=1)
+    draw.text((8, len(ROWS) * (PANEL + label) + 8),
+              "Left of each pair: the 4D object projected to its 3D retina, the hyperplane w = c "
+              "marked in cyan where it cuts the surface seen; right: the 3D slice, traced as a "
+              "3D scene.", fill=(0, 0, 0), font=ImageFont.load_default(size=16))
     sheet.save(os.path.join(HERE, "slices.png"))
 
     scene = ndtrace.load_file(os.path.join(SCENES, "tesseract.toml"))
     scene.set_slice([0, 0, 0, 1], 0.0)
     data = scene.to_dict()
-    data["camera"]["resolution"] = 48
+    data["camera"]["resolution"] = 64
     data["composite"] = {"layout": "slice", "size": [400, 200]}
     data["animation"] = {"frames": 30, "fps": 10,
                          "slice": {"normal": [0, 0, 0, 1], "from": -1.35, "to": 1.35}}

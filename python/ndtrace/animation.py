@@ -87,7 +87,7 @@ def render_frame(animated: Scene, k: int, threads: int | None, options: dict,
     """Frame ``k`` of ``animated``'s animation traced and composited with ``options``: the
     picture ``animate`` writes (here or on a Dask worker)."""
     still = frame_scene(animated, k)
-    if (cut := sliced(still)) is not still:
+    if (cut := sliced(still, options.get("size"))) is not still:
         # A [slice] (or a slice sweep): the frame is the (N−1)-D slice.
         options = slice_options(options, cut.dim)
         still = cut

@@ -387,7 +387,7 @@ def _render(args: argparse.Namespace, scene: Scene, animating: bool, turntable: 
             print("wrote " + " and ".join(written), file=sys.stderr)
         return 0
     options = _picture_options(scene, args.transparent)
-    if (cut := sliced(scene)) is not scene:
+    if (cut := sliced(scene, options.get("size"))) is not scene:
         # The (N−1)-D slice is the scene to trace (the CLI's [slice], layout not "slice").
         options = slice_options(options, cut.dim)
         scene = cut

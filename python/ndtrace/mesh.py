@@ -432,9 +432,10 @@ def _normal(normal, dim: int) -> np.ndarray:
 def _offset(offset) -> float:
     if isinstance(offset, bool) or not isinstance(offset, numbers.Real):
         raise ValueError(f"offset: expected a real number, got {offset!r}")
-    if not np.isfinite(offset):
+    value = float(offset)
+    if not np.isfinite(value):
         raise ValueError(f"offset: must be finite, got {offset}")
-    return float(offset)
+    return value
 
 
 def slice_with_values(vertices, simplices, normal, offset, values=None):

@@ -6,8 +6,10 @@ for a scene cut by a hyperplane (the 4D Toys view: an N-D object passing through
   the scene to trace.
 * With ``layout = "slice"``, the picture is the N-D projection (left half) with the slicing
   hyperplane marked where it crosses the objects (a band of cells whose hit point lies within
-  a cell of the hyperplane, drawn in :data:`BAND_COLOR`) beside the current slice (right half):
-  :func:`picture`.
+  :data:`BAND_CELLS` cells of the hyperplane, drawn in :data:`BAND_COLOR`; the projection in
+  the ``first_hit`` mode unless the scene's ``[composite]`` names a mode) beside the current
+  slice (right half): :func:`picture`. A slice of dimension 3 is traced at the picture's
+  resolution (its retina is the picture).
 """
 
 from __future__ import annotations
@@ -18,12 +20,15 @@ import numpy as np
 
 from .composite import composite
 from .retina import Retina, trace
-from .scene import Scene, slice_scene
+from .scene import Scene, load_dict, slice_scene
 
-__all__ = ["sliced", "slice_options", "picture", "hit_points", "BAND_COLOR"]
+__all__ = ["sliced", "slice_options", "at_size", "picture", "hit_points", "BAND_COLOR",
+           "BAND_CELLS"]
 
 #: Linear RGB of the band that marks the slicing hyperplane in the projection.
-BAND_COLOR = (1.0, 0.62, 0.05)
+BAND_COLOR = (0.0, 0.75, 1.0)
+#: Half-width of that band, in retina cells (at the hit's depth).
+BAND_CELLS = 1.0
 
 #: Composite options that mean the same for the slice's picture as for the projection's.
 _SHARED = ("size", "background", "mode", "azimuth", "elevation", "distance", "zoom",
@@ -35,13 +40,27 @@ def _layout(description: dict) -> str:
     return str((description.get("composite") or {}).get("layout") or "single")
 
 
-def sliced(scene: Scene) -> Scene:
-    """The scene to trace for a still: its ``[slice]`` when it has one and its layout is not
-    ``"slice"``, else the scene itself."""
+#: The picture size when the options give none (the compositor's default).
+DEFAULT_SIZE = (512, 512)
+
+
+def at_size(cut: Scene, size) -> Scene:
+    """A 3D slice traced at the picture's size (its 2D retina is the picture), else as is."""
+    if cut.dim != 3:
+        return cut
+    data = cut.to_dict()
+    data["camera"]["resolution"] = [int(v) for v in (size or DEFAULT_SIZE)]
+    return load_dict(data, base=cut._base)
+
+
+def sliced(scene: Scene, size=None) -> Scene:
+    """The scene to trace for a still of ``size`` (width, height): its ``[slice]`` when it has
+    one and its layout is not ``"slice"`` (a 3D slice at the picture's resolution), else the
+    scene itself."""
     data = scene.to_dict()
     if data.get("slice") is None or _layout(data) == "slice":
         return scene
-    return slice_scene(scene)
+    return at_size(slice_scene(scene), size)
 
 
 def slice_options(options: dict, dim: int) -> dict:
@@ -84,20 +103,32 @@ def hit_points(retina: Retina) -> np.ndarray:
 
 
 def _band(retina: Retina, normal, offset: float) -> Retina:
-    """``retina`` with the cells whose hit lies within a cell's width of the hyperplane
-    n̂·x = offset painted :data:`BAND_COLOR`, opaque."""
+    """``retina`` with the cells whose hit lies within :data:`BAND_CELLS` cells of the
+    hyperplane n̂·x = offset painted :data:`BAND_COLOR`, opaque, their normals turned across
+    the surface (the in-surface direction of n̂), so that the illustrative mode draws the band
+    as a crease and the other modes as a coloured stripe."""
     x = hit_points(retina)
     n = np.asarray(normal, dtype=np.float64)
     n = n / np.linalg.norm(n)
     info = retina._camera_info() or {}
     cell = float(info.get("cell", 0.0))
     depth = retina.depth.astype(np.float64)
-    width = 0.75 * cell * (depth if info.get("perspective") else 1.0)
+    width = BAND_CELLS * cell * (depth if info.get("perspective") else 1.0)
     with np.errstate(invalid="ignore"):
         on = np.abs(x @ n - offset) <= width
     rgba = retina.rgba.copy()
     rgba[on] = (*BAND_COLOR, 1.0)
-    return Retina(retina.dim, rgba, retina.depth, retina.normal, retina.object_id,
+    # The normals: n̂ made orthogonal to each band cell's own (or an axis, where they agree).
+    normals = retina.normal.copy()
+    m = normals[on].astype(np.float64)
+    across = n - (m @ n)[:, None] * m
+    flat = np.linalg.norm(across, axis=1) < 1e-6
+    if np.any(flat):
+        axis = np.zeros(len(n))
+        axis[int(np.argmin(np.abs(n)))] = 1.0
+        across[flat] = axis - (m[flat] @ axis)[:, None] * m[flat]
+    normals[on] = (across / np.linalg.norm(across, axis=1, keepdims=True)).astype(normals.dtype)
+    return Retina(retina.dim, rgba, retina.depth, normals, retina.object_id,
                   retina.primitive_id, retina.camera, retina._source)
 
 
@@ -113,11 +144,15 @@ def picture(scene: Scene, retina: Retina, options: dict, *, threads: int | None 
     if cut is None:
         raise ValueError('composite.layout: "slice" needs the scene\'s [slice] table (or '
                          "--slice) to say which hyperplane")
+    # The band reads on the surface the first-hit mode draws; the illustrative mode's nearly
+    # clear cells would hide it: first_hit unless the scene's [composite] chooses a mode.
+    given = data.get("composite") or {}
+    left_options = {**options, "mode": options.get("mode") if "mode" in given else "first_hit"}
     left = composite(_band(retina, cut["normal"], float(cut["offset"])), threads=threads,
-                     **options)
+                     **left_options)
     height, width = left.shape[:2]
     half = width - width // 2
-    cut_scene = slice_scene(scene)
+    cut_scene = at_size(slice_scene(scene), (half, height))
     right_options = slice_options({**options, "size": (half, height)}, cut_scene.dim)
     right = composite(trace(cut_scene, threads=threads, progress=progress), threads=threads,
                       **right_options)

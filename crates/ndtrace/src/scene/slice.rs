@@ -137,7 +137,7 @@ pub fn slice_desc<const N: usize>(
                 .map(|k| (0..m).map(|i| if i == k { 1.0 } else { 0.0 }).collect()),
         );
     for c in candidates {
-        if up.len() + 2 >= m + 1 {
+        if up.len() + 2 >= m {
             break;
         }
         let mut u = c.clone();

@@ -30,8 +30,9 @@ fn det_rows(mut a: Vec<Vec<f64>>) -> f64 {
     d
 }
 
-/// The (N−1)-volume the slice encloses: Σ det[y_0 … y_{N−2}] / (N−1)! over its pieces (the
-/// cones from the origin of the hyperplane's coordinates).
+/// The (N−1)-volume the slice encloses: Σ N_s·y_0 / (N−1)! = Σ det[y_1−y_0 … | y_0] / (N−1)!
+/// over its pieces (eq. 6's normal N_s; the cones from the origin of the hyperplane's
+/// coordinates), positive for an outward slice.
 fn enclosed_volume<const N: usize>(s: &Slice<N>) -> f64 {
     let y = s.coords();
     let m = N - 1;
@@ -39,11 +40,13 @@ fn enclosed_volume<const N: usize>(s: &Slice<N>) -> f64 {
     s.simplices
         .chunks(m)
         .map(|p| {
-            det_rows(
-                p.iter()
-                    .map(|&i| y[i as usize * m..(i as usize + 1) * m].to_vec())
-                    .collect(),
-            )
+            let row = |i: u32| &y[i as usize * m..(i as usize + 1) * m];
+            let mut rows: Vec<Vec<f64>> = p[1..]
+                .iter()
+                .map(|&i| row(i).iter().zip(row(p[0])).map(|(a, b)| a - b).collect())
+                .collect();
+            rows.push(row(p[0]).to_vec());
+            det_rows(rows)
         })
         .sum::<f64>()
         / fact
