@@ -120,12 +120,22 @@ pub fn motion<const N: usize>(a: &AnimationDesc, t: f64) -> R<Matrix<N>> {
         a.slerp.is_some(),
         a.rolling.is_some(),
         a.slice.is_some(),
+        a.keyframes.is_some(),
     ];
     if given.iter().filter(|&&g| g).count() != 1 {
         return Err(PathError::new(
             "animation",
-            "give exactly one motion: sweep, slerp, rolling or slice",
+            "give exactly one motion: sweep, slerp, rolling, slice or keyframes",
         ));
+    }
+    if a.interpolation.is_some() && a.keyframes.is_none() {
+        return Err(PathError::new(
+            "animation.interpolation",
+            "applies to keyframes only",
+        ));
+    }
+    if let Some(keys) = &a.keyframes {
+        return keyframed::<N>(keys, a.interpolation.unwrap_or_default(), t);
     }
     if a.slice.is_some() {
         slice_at::<N>(a, t)?;
@@ -217,6 +227,76 @@ pub fn motion<const N: usize>(a: &AnimationDesc, t: f64) -> R<Matrix<N>> {
         m = mat_mul(&rolling_ball::<N>(&d, r.radius, angle), &m);
     }
     Ok(m)
+}
+
+/// The rotation of `keyframes` at animation time t ∈ [0, 1] (mapped onto the first to the
+/// last key's time): a C¹ spline through the keys ([`crate::rotation::spline`]: quaternions
+/// for N = 3, double quaternions for N = 4, SO(N) through the matrix log and exp otherwise),
+/// or geodesic pieces between neighbours (`"slerp"`).
+fn keyframed<const N: usize>(keys: &[KeyframeDesc], how: Interpolation, t: f64) -> R<Matrix<N>> {
+    use crate::rotation::spline;
+    let times: Vec<f64> = keys.iter().map(|k| k.time).collect();
+    let mats: Vec<Matrix<N>> = keys
+        .iter()
+        .enumerate()
+        .map(|(i, k)| {
+            super::transform::rotate::<N>(
+                &k.rotation,
+                &format!("animation.keyframes[{i}].rotation"),
+            )
+        })
+        .collect::<R<_>>()?;
+    spline::check_times(&times, keys.len()).map_err(|e| match e {
+        NdError::Value { arg, message } if arg == "times" => {
+            PathError::new("animation.keyframes", format!("times {message}"))
+        }
+        e => PathError::new("animation.keyframes", e.to_string()),
+    })?;
+    let time = times[0] + t * (times[keys.len() - 1] - times[0]);
+    let fail = |e: NdError| PathError::new("animation.keyframes", e.to_string());
+    match how {
+        Interpolation::Slerp => {
+            // Geodesic pieces: the two keys around `time`, whose two-key spline is the slerp.
+            let i = times
+                .partition_point(|&x| x <= time)
+                .clamp(1, keys.len() - 1)
+                - 1;
+            let pair = [mats[i], mats[i + 1]];
+            interpolate::<N>(&pair, &times[i..i + 2], time).map_err(fail)
+        }
+        Interpolation::Spline => interpolate::<N>(&mats, &times, time).map_err(fail),
+    }
+}
+
+/// The spline through rotations `mats` at `times`, at `time`, by the form of its dimension.
+fn interpolate<const N: usize>(
+    mats: &[Matrix<N>],
+    times: &[f64],
+    time: f64,
+) -> crate::NdResult<Matrix<N>> {
+    use crate::rotation::{matrix_to_quat_sequence, quat_to_matrix, quaternions_from_so4, spline};
+    let cast =
+        |m: &[f64]| -> Matrix<N> { std::array::from_fn(|r| std::array::from_fn(|c| m[r * N + c])) };
+    if N == 3 {
+        let m3: Vec<Matrix<3>> = mats
+            .iter()
+            .map(|m| std::array::from_fn(|r| std::array::from_fn(|c| m[r][c])))
+            .collect();
+        let q = matrix_to_quat_sequence(&m3);
+        let r = quat_to_matrix(&spline::quaternion_spline(&q, times, &[time], true)?[0]);
+        return Ok(cast(r.as_flattened()));
+    }
+    if N == 4 {
+        let (l, p): (Vec<_>, Vec<_>) = mats
+            .iter()
+            .map(|m| {
+                quaternions_from_so4(&std::array::from_fn(|r| std::array::from_fn(|c| m[r][c])))
+            })
+            .unzip();
+        let r = spline::so4_spline(&l, &p, times, &[time])?[0];
+        return Ok(cast(r.as_flattened()));
+    }
+    Ok(spline::so_n_spline(mats, times, &[time])?[0])
 }
 
 /// The `[slice]` of a slice sweep at time t: offset `from + t·(to − from)`; `None` for the

@@ -192,6 +192,34 @@ pub struct AnimationDesc {
     /// scene's slice at that offset).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub slice: Option<SliceSweepDesc>,
+    /// Rotations at given times, interpolated ([`crate::rotation::spline`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keyframes: Option<Vec<KeyframeDesc>>,
+    /// How `keyframes` are interpolated: `"spline"` (C¹, the default) or `"slerp"` (geodesic
+    /// pieces).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interpolation: Option<Interpolation>,
+}
+
+/// One keyframe: the rotation at a time.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeyframeDesc {
+    /// When (any unit; the frames span the first to the last key's time).
+    pub time: f64,
+    /// The rotation, in any form of a transform's `rotate` step.
+    pub rotation: RotateDesc,
+}
+
+/// How keyframes are interpolated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Interpolation {
+    /// A C¹ orientation spline through the keys.
+    #[default]
+    Spline,
+    /// Geodesic pieces between neighbouring keys.
+    Slerp,
 }
 
 fn default_frames() -> u32 {
@@ -756,6 +784,27 @@ pub struct RenderDesc {
     /// What to render.
     #[serde(default)]
     pub mode: RenderMode,
+    /// Where the lighting is evaluated: at every hit (`"phong"`, the default) or at the hit
+    /// simplex's vertices and interpolated (`"gouraud"`).
+    #[serde(default, skip_serializing_if = "is_phong")]
+    pub shading: Shading,
+}
+
+fn is_phong(s: &Shading) -> bool {
+    *s == Shading::Phong
+}
+
+/// Where the lighting model is evaluated (notes Part II(B): "dot product of light with 4D
+/// versions of usual vectors give Gouraud and Phong models").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Shading {
+    /// At every hit point, with the interpolated shading normal (Phong).
+    #[default]
+    Phong,
+    /// At the vertices of the hit simplex (their normals, positions and directions to the
+    /// eye), the diffuse and specular factors interpolated barycentrically (Gouraud).
+    Gouraud,
 }
 
 fn default_samples() -> u32 {
@@ -774,6 +823,7 @@ impl Default for RenderDesc {
             cull_backfaces: false,
             two_sided: true,
             mode: RenderMode::Shaded,
+            shading: Shading::Phong,
         }
     }
 }
