@@ -16,11 +16,11 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 SCENES = os.path.join(HERE, "..", "..", "scenes")
 PANEL = 300
 SPHERE_CUT = [{"normal": [1, 0, 0, 0], "offset": 0.2}]
-TESSERACT_CUT = [{"normal": [1, 0.6, 0.3, 0.8], "offset": 0.3}]
+TESSERACT_CUT = [{"normal": [0, 1, 0, 0.5], "offset": 0.3}]
 COLUMNS = [("sphere3.toml", [], False, "3-sphere"),
-           ("sphere3.toml", SPHERE_CUT, False, "3-sphere, clip x ≤ 0.2"),
+           ("sphere3.toml", SPHERE_CUT, False, "3-sphere, clip x <= 0.2"),
            ("sphere3.toml", SPHERE_CUT, True, "the same, cap = true"),
-           ("tesseract.toml", TESSERACT_CUT, True, "tesseract, oblique clip, capped")]
+           ("tesseract.toml", TESSERACT_CUT, True, "tesseract, clip y + w/2 <= 0.3, capped")]
 
 
 def main() -> None:

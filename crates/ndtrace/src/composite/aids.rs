@@ -63,6 +63,22 @@ pub enum ViewLayout {
     Slice,
 }
 
+/// `cubes = { size = s }`: the notes' display aid "break into tiny cubes — to help see inside
+/// volume, leave a little space instead of transparency": each occupied retina cell (coverage
+/// ≥ ½) drawn as an opaque cube of side s cells about its centre, in the cell's colour, its
+/// faces shaded by a headlight so the cubes read as solids.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cubes {
+    /// The cube's side, a fraction of a cell in (0, 1] (default 0.6).
+    #[serde(default = "default_cube_size")]
+    pub size: f64,
+}
+
+fn default_cube_size() -> f64 {
+    0.6
+}
+
 impl Cutaway {
     /// Checks the region's numbers; `key` names the option in messages.
     pub fn validate(&self, key: &str) -> Result<(), (String, String)> {

@@ -195,9 +195,12 @@ struct Piece {
     parent: u32,
 }
 
+/// A path through the grid of crossings: its (i above, j below) points.
+type Staircase = Vec<(usize, usize)>;
+
 /// The monotone lattice paths from (0, 0) to (a−1, b−1) (the staircase triangulation of
 /// Δ^{a−1} × Δ^{b−1}), each as its a + b − 1 grid points.
-fn staircases(a: usize, b: usize) -> Vec<Vec<(usize, usize)>> {
+fn staircases(a: usize, b: usize) -> Vec<Staircase> {
     let mut out = Vec::new();
     let mut path = vec![(0, 0)];
     fn walk(
@@ -241,7 +244,8 @@ pub fn slice<const N: usize>(mesh: &Mesh<N>, plane: &SlicePlane<N>) -> Slice<N> 
         }
     });
     let frame_sign = det(&frame).signum();
-    let stairs: Vec<Vec<Vec<Vec<(usize, usize)>>>> = (0..=N)
+    // Per (a, b): the staircases of Δ^{a−1} × Δ^{b−1}.
+    let stairs: Vec<Vec<Vec<Staircase>>> = (0..=N)
         .map(|a| {
             (0..=N)
                 .map(|b| {
@@ -433,7 +437,7 @@ pub struct SliceRows {
     pub parents: Vec<u32>,
 }
 
-/// [`slice`] of the mesh given by flat rows (`vertices` (V, dim), `simplices` (S, dim)),
+/// [`slice()`] of the mesh given by flat rows (`vertices` (V, dim), `simplices` (S, dim)),
 /// with optional per-vertex `values` interpolated at the crossings. Errors name the argument.
 pub fn slice_rows(
     dim: usize,

@@ -8,7 +8,7 @@
 //! simplex (a flat simplex meets a ray at most once), until a hit is kept or none is left. The
 //! result is the least (t, id) over the kept hits, as a brute-force test of every simplex
 //! would give it, whatever the thread count. A scene without clips does none of this: one
-//! branch per group of rays ([`Clips::active`]).
+//! branch per group of rays ([`crate::scene::clip::Clips::active`]).
 //!
 //! A cap (`cap = true`) is an extra object of simplices filling the object's cut in the clip
 //! hyperplane (`scene/clip.rs`, from `crate::mesh::slice`). A convex object's cut is convex

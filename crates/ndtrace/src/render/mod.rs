@@ -27,6 +27,7 @@
 //! number of threads.
 
 pub mod clip;
+mod gouraud;
 mod packets;
 pub mod pool;
 mod sampling;

@@ -14,12 +14,12 @@
 
 use super::shade::{
     blinn_phong, hit_color, id_color, light_term, shading_normal, shadow_ray, toward_light,
-    SHADOW_OFFSET,
+    vertex_factors, SHADOW_OFFSET,
 };
 use super::NearestHit;
 use crate::linalg::{add_scaled, dot, norm, scale, Vector};
 use crate::ray::{Hit, Ray};
-use crate::scene::desc::RenderMode;
+use crate::scene::desc::{RenderMode, Shading};
 use crate::scene::Scene;
 use std::ops::Range;
 
@@ -146,7 +146,7 @@ impl<const N: usize> GroupTracer<N> {
                         ray,
                         dir_len,
                         hit,
-                        obj,
+                        (obj, local),
                         sh,
                         &diffuse,
                         &n,
@@ -257,7 +257,7 @@ fn light_terms<const N: usize>(
     ray: &Ray<N>,
     dir_len: f64,
     hit: &Hit<N>,
-    obj: usize,
+    (obj, local): (usize, usize),
     sh: &ObjectShading,
     diffuse: &[f64; 3],
     n: &Vector<N>,
@@ -276,7 +276,13 @@ fn light_terms<const N: usize>(
         };
         let l = to_light.dir;
         let ndl = dot(n, &l);
-        if ndl <= 0.0 {
+        let gouraud = (scene.render.shading == Shading::Gouraud).then(|| {
+            let flip = super::gouraud::flipped(scene, hit, ray);
+            super::gouraud::factors(scene, (obj, local), hit, flip, |x, n| {
+                vertex_factors(scene, light, x, n, m.shininess, sh.specular)
+            })
+        });
+        if gouraud.map_or(ndl <= 0.0, |(d, s)| d <= 0.0 && s <= 0.0) {
             continue;
         }
         let shadow = if scene.render.shadows {
@@ -297,14 +303,17 @@ fn light_terms<const N: usize>(
             None
         };
         // Without a specular coefficient the term is k_d ∘ C · (n̂·l̂) + 0.
-        let spec = match &v {
-            Some(v) => blinn_phong(n, &l, v, m.shininess),
-            None => 0.0,
+        let term = match gouraud {
+            None => {
+                let spec = match &v {
+                    Some(v) => blinn_phong(n, &l, v, m.shininess),
+                    None => 0.0,
+                };
+                light_term(&to_light, diffuse, ndl, &m.specular, spec)
+            }
+            // The factors carry the attenuation at each vertex.
+            Some((d, spec)) => light_term(&to_light.unattenuated(), diffuse, d, &m.specular, spec),
         };
-        emit(
-            index,
-            light_term(&to_light, diffuse, ndl, &m.specular, spec),
-            shadow,
-        );
+        emit(index, term, shadow);
     }
 }
