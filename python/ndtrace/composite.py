@@ -142,7 +142,10 @@ def composite(
       and three orthogonal sections through ``section`` in the others (top right across z:
       the retina slice face-on; bottom left across x: z right, y up; bottom right across y:
       x right, z down); ``"stereo"`` a side-by-side pair for parallel viewing, the left half
-      from ``azimuth − stereo_angle/2``, the right from ``azimuth + stereo_angle/2``.
+      from ``azimuth − stereo_angle/2``, the right from ``azimuth + stereo_angle/2``;
+      ``"slice"`` the view in the left half, the right half left for the scene's ``[slice]``
+      (the command line and :func:`ndtrace.animate` draw the slice there and mark the
+      hyperplane in the view: :func:`ndtrace.slicing.picture`).
     * ``section`` [(0, 0, 0)] — the world point (volume centred, longest side spanning
       [−1, 1]; x columns, y up, z slices) the sections pass through.
     * ``stereo_angle`` [6] — degrees between the eyes of the stereo pair, 0 … 30.
