@@ -115,6 +115,7 @@ impl<const N: usize> GroupTracer<N> {
         self.shadow.clear();
         let requests = &mut self.requests;
         requests.clear();
+        let gouraud = scene.render.shading == Shading::Gouraud;
         // 2. Each ray's colour, but for the light terms that wait for their shadow rays.
         for (r, (ray, hit)) in self.rays.iter().zip(&self.hits).enumerate() {
             let Some(hit) = hit else {
@@ -141,31 +142,32 @@ impl<const N: usize> GroupTracer<N> {
                     // Terms are summed in light order: directly until one waits for its shadow
                     // ray, then after the shadow pass.
                     let mut waiting = false;
-                    light_terms(
-                        scene,
-                        ray,
-                        dir_len,
-                        hit,
-                        (obj, local),
-                        sh,
-                        &diffuse,
-                        &n,
-                        |l, color, shadow| {
-                            if shadow.is_none() && !waiting {
-                                for k in 0..3 {
-                                    c[k] += color[k];
-                                }
-                                return;
+                    let emit = |l, color: [f64; 3], shadow: Option<ShadowRay<N>>| {
+                        if shadow.is_none() && !waiting {
+                            for k in 0..3 {
+                                c[k] += color[k];
                             }
-                            waiting = true;
-                            if let Some(shadow) = shadow {
-                                requests.push((l, self.terms.len(), shadow));
-                            }
-                            // Set to the shadow ray's index once the rays are in light order.
-                            self.shadow.push(None);
-                            self.terms.push((r, color));
-                        },
-                    );
+                            return;
+                        }
+                        waiting = true;
+                        if let Some(shadow) = shadow {
+                            requests.push((l, self.terms.len(), shadow));
+                        }
+                        // Set to the shadow ray's index once the rays are in light order.
+                        self.shadow.push(None);
+                        self.terms.push((r, color));
+                    };
+                    let at = (obj, local);
+                    // One branch per hit chooses the lighting model's loop.
+                    if gouraud {
+                        light_terms::<N, true>(
+                            scene, ray, dir_len, hit, at, sh, &diffuse, &n, emit,
+                        );
+                    } else {
+                        light_terms::<N, false>(
+                            scene, ray, dir_len, hit, at, sh, &diffuse, &n, emit,
+                        );
+                    }
                     c
                 }
                 RenderMode::Depth => {
@@ -249,10 +251,11 @@ impl<const N: usize> GroupTracer<N> {
 /// calls `emit` per light that faces the surface, in light order, with its index, its colour
 /// term and the shadow ray that decides whether it counts (none when nothing could block it).
 /// Lights behind the surface contribute nothing and need no shadow ray. `dir_len` is
-/// |ray.dir|.
+/// |ray.dir|. `GOURAUD`: the lighting factors at the simplex's vertices, interpolated
+/// (`render.shading = "gouraud"`), else at the hit.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn light_terms<const N: usize>(
+fn light_terms<const N: usize, const GOURAUD: bool>(
     scene: &Scene<N>,
     ray: &Ray<N>,
     dir_len: f64,
@@ -276,7 +279,7 @@ fn light_terms<const N: usize>(
         };
         let l = to_light.dir;
         let ndl = dot(n, &l);
-        let gouraud = (scene.render.shading == Shading::Gouraud).then(|| {
+        let gouraud = GOURAUD.then(|| {
             let flip = super::gouraud::flipped(scene, hit, ray);
             super::gouraud::factors(scene, (obj, local), hit, flip, |x, n| {
                 vertex_factors(scene, light, x, n, m.shininess, sh.specular)
