@@ -20,6 +20,7 @@ Every function takes and returns such a pair, so they compose::
     vertices, simplices = ndtrace.mesh.thicken_surface(v4, triangles, radius=0.05)  # a tube in R^4
     vertices, simplices = ndtrace.mesh.thicken_points(points4, radius=0.01)  # tiny 3-spheres
     vertices, simplices = ndtrace.mesh.elevation_map(field, height=0.5)  # w = 0.5·f(x, y, z)
+    coords, pieces, basis, origin = ndtrace.mesh.slice(vertices, simplices, [0, 0, 0, 1], 0.3)
     scene.add_object("mesh", mesh=(vertices, simplices))               # or a trimesh / meshio mesh
 
 File formats: ``.npz`` archives with arrays ``vertices`` and ``simplices`` (any N, read by the
@@ -48,7 +49,7 @@ from .geometry import generalized_cross
 from .thicken import thicken_points, thicken_surface
 
 __all__ = ["convex_hull", "orient", "feature_edges", "read", "read_field", "from_object",
-           "elevation_map", "thicken_surface", "thicken_points", "CELL_TYPES"]
+           "elevation_map", "slice", "thicken_surface", "thicken_points", "CELL_TYPES"]
 
 #: The meshio cell types that hold the (N−1)-simplices of a dimension-N scene ("quad" cells are
 #: split into two triangles).
@@ -491,3 +492,77 @@ def feature_edges(vertices, simplices, angle: float = 20.0) -> np.ndarray:
         angle_degrees(angle),
     )
     return np.asarray(out, dtype=np.int64).reshape(-1, 2)
+
+
+def _normal(normal, dim: int) -> np.ndarray:
+    n = np.asarray(normal)
+    if n.dtype.kind not in "biuf":
+        raise ValueError(f"normal: expected {dim} real numbers, got dtype {n.dtype}")
+    n = n.astype(np.float64)
+    if n.shape != (dim,):
+        raise ValueError(f"normal: expected shape ({dim},) (dim = {dim}), got {n.shape}")
+    if not np.all(np.isfinite(n)) or not np.any(n != 0):
+        raise ValueError(f"normal: must be a finite non-zero vector, got {n.tolist()}")
+    return n
+
+
+def _offset(offset) -> float:
+    if isinstance(offset, bool) or not isinstance(offset, numbers.Real):
+        raise ValueError(f"offset: expected a real number, got {offset!r}")
+    value = float(offset)
+    if not np.isfinite(value):
+        raise ValueError(f"offset: must be finite, got {offset}")
+    return value
+
+
+def slice_with_values(vertices, simplices, normal, offset, values=None):
+    """:func:`slice`, with per-vertex ``values`` (V,) interpolated at the new vertices and the
+    index of the simplex each piece was cut from: ``(vertices, simplices, basis, origin,
+    values (V',) or None, parents (S',))``."""
+    v, s = _mesh(vertices, simplices)
+    if v.shape[1] < 3:
+        raise ValueError(f"vertices: slices need N ≥ 3 (a mesh of (N−1)-simplices in R^N), "
+                         f"got shape {v.shape}")
+    n = _normal(normal, v.shape[1])
+    c = _offset(offset)
+    vals = None
+    if values is not None:
+        vals = np.ascontiguousarray(values, dtype=np.float64)
+        if vals.shape != (len(v),):
+            raise ValueError(f"values: expected shape ({len(v)},), one per vertex, got "
+                             f"{vals.shape}")
+    coords, pieces, basis, origin, out_values, parents = _ndtrace.slice_mesh(
+        v, s.astype(np.uint32), n.tolist(), c, vals)
+    return coords, pieces, basis, origin, (out_values if vals is not None else None), parents
+
+
+def slice(vertices, simplices, normal, offset) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                        np.ndarray]:
+    """The intersection of the mesh with the hyperplane ``n̂·x = offset``: ``(vertices (V', N−1),
+    simplices (S', N−1), basis (N−1, N), origin (N,))``, an (N−2)-simplex mesh in the
+    hyperplane's own orthonormal coordinates, ``x = origin + coords @ basis``.
+
+    ``normal`` (N numbers) need not be unit length; it is normalized, so ``offset`` is the
+    hyperplane's signed distance from the origin and ``origin = offset·n̂``. ``basis`` holds the
+    coordinate axes but the one most aligned with n̂, in order, made orthonormal to n̂ (for an
+    axis normal the other axes: ``normal = [0, 0, 0, 1]`` gives x, y, z).
+
+    Each simplex is cut with the course's clipping formulas (the side of each vertex from
+    eq. 1, the crossing of each edge at ``t = n̂·(x_a − x_0) / n̂·(x_a − x_b)``, eq. 10): a
+    tetrahedron gives a triangle or a quadrilateral (two triangles), an (N−1)-simplex with a
+    vertices above and b below the product Δ^{a−1}×Δ^{b−1}, cut by its staircase triangulation
+    with the vertices ordered by index, so that shared faces are cut alike and a closed mesh
+    gives a closed slice. Each piece is oriented along its simplex's normal projected into the
+    hyperplane: a closed, outward mesh gives a closed slice oriented outward in the slice.
+
+    Degenerate cuts: a vertex on the hyperplane counts as above it (the slice is the limit of
+    the slices by ``n̂·x = offset − ε``), and is one output vertex however many edges reach it;
+    pieces that collapse are dropped, and pieces with the same vertices and opposite
+    orientations cancel. So a cut along a facet gives that facet's outline, a cut that only
+    touches the mesh from outside gives nothing, and no piece is duplicated or of zero area.
+
+    Raises ValueError naming the argument for a zero, non-finite or wrongly sized ``normal``,
+    a non-finite ``offset``, and the checks of :func:`orient` on the mesh (N ≥ 3).
+    """
+    coords, pieces, basis, origin, _, _ = slice_with_values(vertices, simplices, normal, offset)
+    return coords, pieces, basis, origin

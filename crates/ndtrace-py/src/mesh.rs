@@ -5,6 +5,7 @@
 use crate::errors::guarded;
 use ndtrace::mesh::elevation::{self, Field};
 use ndtrace::mesh::orientation;
+use ndtrace::mesh::slice;
 use ndtrace::scene::npz::{self, Array2, ArrayNd};
 use ndtrace::scene::MeshReader;
 use numpy::{
@@ -208,9 +209,55 @@ fn read_array<'py>(
     Ok((array.into_any(), a.dtype.trim_matches('\'').to_string()))
 }
 
+/// `ndtrace.mesh.slice`'s kernel: the slice of the mesh by the hyperplane n̂·x = `offset`
+/// (arrays checked by the Python wrapper): vertices (V', N−1), simplices (S', N−1), basis
+/// (N−1, N), origin (N,), the `values` interpolated at the new vertices (V',) and the parent
+/// simplex of each new one (S',).
+#[pyfunction]
+#[pyo3(signature = (vertices, simplices, normal, offset, values=None))]
+#[allow(clippy::type_complexity)]
+fn slice_mesh<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f64>,
+    simplices: PyReadonlyArray2<'py, u32>,
+    normal: Vec<f64>,
+    offset: f64,
+    values: Option<numpy::PyReadonlyArray1<'py, f64>>,
+) -> PyResult<(
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<i64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<i64>>,
+)> {
+    let dim = vertices.shape()[1];
+    let v = rows(&vertices).map_err(pyo3::exceptions::PyValueError::new_err)?;
+    let s = rows(&simplices).map_err(pyo3::exceptions::PyValueError::new_err)?;
+    let values = values.map(|a| a.as_array().to_vec());
+    let r = py.detach(|| {
+        guarded("mesh.slice", || {
+            slice::slice_rows(dim, &v, &s, &normal, offset, values.as_deref())
+        })
+    })?;
+    let m = dim - 1;
+    let nv = r.coords.len() / m;
+    let ns = r.simplices.len() / m;
+    Ok((
+        PyArray1::from_vec(py, r.coords).reshape([nv, m])?,
+        PyArray1::from_vec(py, r.simplices.into_iter().map(i64::from).collect())
+            .reshape([ns, m])?,
+        PyArray1::from_vec(py, r.basis).reshape([m, dim])?,
+        PyArray1::from_vec(py, r.origin),
+        PyArray1::from_vec(py, r.values),
+        PyArray1::from_vec(py, r.parents.into_iter().map(i64::from).collect()),
+    ))
+}
+
 /// Adds the mesh functions.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_array, m)?)?;
+    m.add_function(wrap_pyfunction!(slice_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(orient_flips, m)?)?;
     m.add_function(wrap_pyfunction!(elevation_map, m)?)?;
     Ok(())

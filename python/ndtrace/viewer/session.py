@@ -31,7 +31,8 @@ from ..composite import composite, scene_options
 from ..display import camera_resolution, reduced_resolution
 from ..files import to_srgb8
 from ..retina import Retina, trace
-from ..scene import Scene, load_dict
+from ..scene import Scene, load_dict, slice_scene
+from ..slicing import at_size, slice_options
 from . import controls
 from .worker import DRAFT, FULL, Superseded
 
@@ -213,6 +214,7 @@ class Snapshot:
     seq: int
     rotation: np.ndarray
     options: dict
+    slice: float | None = None
 
 
 def draft_resolution(resolution: list[int], cells: int = DRAFT_CELLS) -> list[int]:
@@ -271,6 +273,11 @@ class ViewSession:
         self.initial_options = initial
         self.options = dict(initial)
         self.rotation = np.eye(self.dim)
+        # Slice mode: the offset of the hyperplane x_{N−1} = offset the page shows the scene's
+        # slice by (None: off). The rolling ball turns the objects through it, i.e. turns the
+        # hyperplane by the inverse rotation in the objects' frame.
+        self.slice: float | None = None
+        self.slice_normal = [0.0] * (self.dim - 1) + [1.0]
         self.seq = 0
         self._arcball: tuple[np.ndarray, np.ndarray, bool] | None = None
         self._retina: tuple[bytes, str, Retina] | None = None  # the last traced retina
@@ -287,7 +294,7 @@ class ViewSession:
             **self.state(), "type": "hello", "scene": self.name, "dim": self.dim, "picture": list(self.size),
             "radius": self.radius, "modes": list(self.modes) if self.dim >= 4 else [],
             "mode_default": self._mode_default, "aids": self.aids,
-            "arcball": self.dim == 4, "orbit": self.dim >= 4,
+            "arcball": self.dim == 4, "orbit": self.dim >= 4, "slices": self.dim >= 4,
             "resolution": self.resolution, "draft": self.draft,
         }
 
@@ -299,10 +306,10 @@ class ViewSession:
 
     def state(self) -> dict:
         return {"type": "state", "seq": self.seq, "rotation": self.rotation.tolist(),
-                "options": _jsonable(self.options)}
+                "options": _jsonable(self.options), "slice": self.slice}
 
     def snapshot(self) -> Snapshot:
-        return Snapshot(self.seq, self.rotation.copy(), dict(self.options))
+        return Snapshot(self.seq, self.rotation.copy(), dict(self.options), self.slice)
 
     # -- inputs --------------------------------------------------------------------------
     def handle(self, msg: dict) -> tuple[dict | None, str | None]:
@@ -432,6 +439,17 @@ class ViewSession:
             if isinstance(value, float) and not math.isfinite(value):  # a reply must be JSON
                 raise ValueError(f"{key}: must be finite, got {value}")
 
+    def _on_slice(self, msg: dict) -> str:
+        """``{"type": "slice", "on": bool, "offset": number}``: slice mode on at that offset of
+        the hyperplane x_{N−1} = offset (the last axis), or off."""
+        if self.dim < 4:
+            raise ValueError(f"slice: slice mode needs dim ≥ 4 (a 3D slice or more), got {self.dim}")
+        on = msg.get("on", True)
+        if not isinstance(on, bool):
+            raise ValueError(f"slice.on: expected true or false, got {on!r}")
+        self.slice = self._number(msg, "offset") if on else None
+        return "now"
+
     def _on_rotation(self, msg: dict) -> str:
         self.rotation = controls.check_rotation(msg.get("matrix"), self.dim)
         return "now"
@@ -443,6 +461,7 @@ class ViewSession:
     def _on_reset(self, msg: dict) -> str:
         self.rotation = np.eye(self.dim)
         self.options = dict(self.initial_options)
+        self.slice = None
         return "now"
 
     def _on_release(self, msg: dict) -> str:
@@ -472,13 +491,20 @@ class ViewSession:
         marching step of at least :data:`DRAFT_STEP`, full ones as PNG. Returns the frame's
         metadata and the encoded picture."""
         t0 = time.perf_counter()
-        key = snap.rotation.tobytes()
+        key = snap.rotation.tobytes() + repr(snap.slice).encode()
         cached = self._retina
         timings: dict[str, float] = {}
         if cached is not None and cached[0] == key and (cached[1] == FULL or quality == DRAFT):
             retina, traced = cached[2], cached[1]
         else:
             scene = self.frame_scene(snap.rotation, quality)
+            if snap.slice is not None:
+                # Slice mode: the (N−1)-D slice of the turned scene, a 3D one at the picture's
+                # resolution (its retina is the picture).
+                w, h = self.size
+                if quality == DRAFT:
+                    w, h = max(1, round(w * self.draft_scale)), max(1, round(h * self.draft_scale))
+                scene = at_size(slice_scene(scene, self.slice_normal, snap.slice), (w, h))
             t1 = time.perf_counter()
             timings["build"] = (t1 - t0) * 1e3
 
@@ -494,6 +520,8 @@ class ViewSession:
             raise Superseded
         t2 = time.perf_counter()
         options = dict(snap.options)
+        if snap.slice is not None:
+            options = slice_options(options, retina.dim)
         if quality == DRAFT:
             w, h = self.size
             options["size"] = (max(1, round(w * self.draft_scale)), max(1, round(h * self.draft_scale)))

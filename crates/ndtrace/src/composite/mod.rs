@@ -43,6 +43,7 @@
 //! picture is bit-identical whatever the number of threads.
 
 mod aids;
+mod cubes;
 pub mod illustrative;
 mod montage;
 mod options;
@@ -51,7 +52,7 @@ mod stages;
 mod view;
 mod volume;
 
-pub use aids::{Cutaway, ViewLayout};
+pub use aids::{Cubes, Cutaway, ViewLayout};
 pub use illustrative::RetinaCamera;
 pub use montage::{slice_layout, Layout, SEPARATOR};
 pub use options::{
