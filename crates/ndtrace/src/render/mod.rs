@@ -16,6 +16,9 @@
 //!   as packets toward each light, constants computed once per trace, shadow rays that cannot
 //!   be blocked not traced. It gives [`shade_hit`]'s bits for every ray (tested cell by cell);
 //! - [`pool`]: the retina's output buffers, reused between traces;
+//! - [`probe`]: the scene as a picture drawn at its own resolution asks it
+//!   ([`crate::composite::SceneProbe`]): its structure in the retina and the 4D rays through
+//!   retina points, shaded as here;
 //! - `splat.rs` and `surface.rs`: after the trace, the surfaces drawn directly
 //!   ([`crate::surface`]) projected into the retina as thin sheets, occluded by depth and
 //!   blended by opacity, each point lit by the limit of its thickening's lighting.
@@ -26,6 +29,7 @@
 
 mod packets;
 pub mod pool;
+pub mod probe;
 mod sampling;
 pub mod shade;
 mod splat;

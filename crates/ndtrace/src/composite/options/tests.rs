@@ -28,6 +28,8 @@ layout = "stereo"
 section = [0.5, -0.25, 0.0]
 stereo_angle = 4.0
 turntable = 12
+samples = 9
+detail = "retina"
 
 [cutaway]
 shape = "sphere"
@@ -69,6 +71,8 @@ fn every_key_sets_its_own_field_and_is_written_back() {
             center: [0.0, 0.25, 0.0],
             radius: 0.5,
         }),
+        samples: 9,
+        detail: Detail::Retina,
         given: GivenKeys::ALL,
     };
     assert_eq!(o, expect);
