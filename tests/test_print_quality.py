@@ -176,29 +176,41 @@ def test_isolines_of_a_linear_field_are_straight_in_a_section():
              .add_object("elevation", field=field, height=0.3,
                          material={"color": [0.8, 0.8, 0.8],
                                    "isolines": {"values": [-0.6, 0.0, 0.6], "color": [0, 0, 0]}}))
-    pic = ndtrace.composite(ndtrace.trace(scene), layout="sections", size=(1024, 1024), mode="volume")
-    tile = pic[:512, 512:, :3].mean(axis=-1)  # across z
-    dark = tile < 0.25
-    rows = np.nonzero(dark.any(axis=1))[0]
-    assert len(rows) > 100
-    # Each row's dark runs: one per isoline; follow the middle one.
-    centres = []
-    for r in rows:
-        xs = np.nonzero(dark[r])[0]
-        runs = np.split(xs, np.nonzero(np.diff(xs) > 1)[0] + 1)
-        if len(runs) == 3:
-            centres.append((r, runs[1].mean()))
-    assert len(centres) > 100
-    r, c = np.asarray(centres).T
-    fit = np.polyfit(r, c, 1)
-    assert np.abs(np.polyval(fit, r) - c).max() <= 0.5
+    retina = ndtrace.trace(scene)
+
+    def middle_line(detail):
+        """Rows of the section across z with three dark runs, and the middle run's centres'
+        largest distance from their straight-line fit."""
+        pic = ndtrace.composite(retina, layout="sections", size=(1024, 1024), mode="volume",
+                                background=[1, 1, 1], detail=detail)
+        dark = pic[:512, 512:, :3].mean(axis=-1) < 0.25  # the tile across z
+        centres = []
+        for r in np.nonzero(dark.any(axis=1))[0]:
+            xs = np.nonzero(dark[r])[0]
+            runs = np.split(xs, np.nonzero(np.diff(xs) > 1)[0] + 1)
+            if len(runs) == 3:
+                centres.append((r, runs[1].mean()))
+        if len(centres) < 2:
+            return len(centres), np.inf
+        r, c = np.asarray(centres).T
+        return len(centres), np.abs(np.polyval(np.polyfit(r, c, 1), r) - c).max()
+
+    rows, deviation = middle_line("scene")
+    assert rows > 100 and deviation <= 0.5, (rows, deviation)
+    # The retina's cells alone draw the lines as scattered blocks (the measure can fail).
+    rows, deviation = middle_line("retina")
+    assert not (rows > 100 and deviation <= 0.5), (rows, deviation)
 
 
 def test_point_blobs_at_equal_depth_have_equal_areas():
-    # Four tiny 3-spheres symmetric about the 4D view axis (equal depth, equal angle off it),
-    # seen face-on: the 90° turns about the axis map their pictures onto each other.
-    a = 0.35
-    points = np.array([[a, a, 0, 0], [-a, a, 0, 0], [-a, -a, 0, 0], [a, -a, 0, 0]], float)
+    # Five tiny 3-spheres at equal distance from the 4D eye and equal angle off its view axis
+    # (on a circle about the axis, at angles unrelated to the retina's grid), seen face-on:
+    # their pictures are congruent, so their areas (summed alpha) must agree.
+    from scipy import ndimage
+
+    a = 0.45
+    angles = np.radians([7.0, 81.0, 152.0, 229.0, 301.0])
+    points = np.stack([a * np.cos(angles), a * np.sin(angles), np.zeros(5), np.zeros(5)], axis=1)
     v, t = ndtrace.mesh.thicken_points(points, radius=0.09, subdivisions=2)
     scene = (ndtrace.Scene(4)
              .set_camera([0.0, 0.0, 0.0, 3.0], look_at=[0, 0, 0, 0], up=[[0, 1, 0, 0], [0, 0, 1, 0]], fov=40,
@@ -206,17 +218,19 @@ def test_point_blobs_at_equal_depth_have_equal_areas():
              .add_light("directional", direction=[0.2, 0.3, 0.5, 1.0])
              .add_object("mesh", vertices=v, simplices=t, material={"color": [0.9, 0.6, 0.3]}))
     retina = ndtrace.trace(scene)
-    opts = dict(mode="first_hit", projection="orthographic", azimuth=0.0, elevation=0.0, size=(512, 512))
+    opts = dict(mode="first_hit", projection="orthographic", azimuth=0.0, elevation=0.0, size=(512, 512),
+                fit=False)
 
     def areas(pic):
         alpha = pic[..., 3]
-        h, w = alpha.shape
-        quads = [alpha[:h // 2, :w // 2], alpha[:h // 2, w // 2:], alpha[h // 2:, :w // 2], alpha[h // 2:, w // 2:]]
-        return np.array([q.sum() for q in quads])
+        labels, count = ndimage.label(alpha > 0)
+        assert count == 5, count
+        return np.asarray(ndimage.sum(alpha, labels, index=np.arange(1, count + 1)))
 
     exact = areas(ndtrace.composite(retina, **opts))
     assert exact.min() > 100
     assert exact.max() / exact.min() - 1 < 0.05, exact
+    # The retina's cells alone give blobs of different sizes (the measure can fail).
     grid = areas(ndtrace.composite(retina, detail="retina", **opts))
     assert grid.max() / grid.min() - 1 > 0.05, grid
 

@@ -70,16 +70,6 @@ const MIN_TRANSMITTANCE: f64 = 1e-4;
 /// (colour as √RGB, alpha as it is) differs by more than this.
 const EDGE_STEP: f32 = 0.02;
 
-static WALKS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-static INTEGRATES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-static PROBES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-static VISIBILITY: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-static EDGES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-#[inline(always)]
-fn stat(c: &std::sync::atomic::AtomicU64) {
-    c.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-}
-
 /// A retina made ready for pictures drawn from its scene.
 pub(super) struct Exact<'a> {
     probe: &'a dyn SceneProbe,
@@ -105,6 +95,9 @@ struct Sample {
     rgba: [f32; 4],
     half: f32,
     sig: u32,
+    /// The share of the ray's (or the pixel's rays') that meet the object, whatever its
+    /// opacity: what the lines drawn over the picture are masked by.
+    cover: f32,
 }
 
 impl Sample {
@@ -112,6 +105,7 @@ impl Sample {
         rgba: [0.0; 4],
         half: f32::INFINITY,
         sig: 0,
+        cover: 0.0,
     };
 }
 
@@ -258,7 +252,7 @@ impl<'a> Exact<'a> {
         cam: &Camera3,
         mode: CompositeMode,
         o: &CompositeOptions,
-    ) -> Option<(Vec<f32>, Vec<f32>)> {
+    ) -> Option<(Vec<f32>, Vec<f32>, Vec<f32>)> {
         let vs = ViewSheets::new(&self.s, &self.s.looks, cam, self.n)?;
         let (w, h) = o.size;
         let bg = o.background.map(|x| x as f32);
@@ -307,17 +301,6 @@ impl<'a> Exact<'a> {
         } else {
             first
         };
-        if std::env::var_os("NDTRACE_PICTURE_STATS").is_some() {
-            use std::sync::atomic::Ordering::Relaxed;
-            eprintln!(
-                "picture: walks {} integrates {} probes {} visibility {} edge pixels {}",
-                WALKS.swap(0, Relaxed),
-                INTEGRATES.swap(0, Relaxed),
-                PROBES.swap(0, Relaxed),
-                VISIBILITY.swap(0, Relaxed),
-                EDGES.swap(0, Relaxed)
-            );
-        }
         let mut img = vec![0f32; w * h * 4];
         let mut half = vec![f32::INFINITY; w * h];
         img.par_chunks_mut(4)
@@ -327,14 +310,19 @@ impl<'a> Exact<'a> {
                 px.copy_from_slice(&over(s.rgba, bg));
                 *hf = s.half;
             });
-        Some((img, half))
+        let cover = finals.iter().map(|s| s.cover).collect();
+        Some((img, half, cover))
     }
 
     /// The silhouettes of the covered region seen by `cam`: the edges where the count sheets
     /// fold away from the compositing eye (one of the two sheets faces it, the other not) that
     /// lie on the outline of the picture's coverage `alpha` (the view's alpha channel), in cell
     /// coordinates, with the 4D depths of their ends.
-    pub(super) fn silhouettes(&self, cam: &Camera3, alpha: &[f32]) -> Vec<(DVec3, DVec3, [f64; 2])> {
+    pub(super) fn silhouettes(
+        &self,
+        cam: &Camera3,
+        alpha: &[f32],
+    ) -> Vec<(DVec3, DVec3, [f64; 2])> {
         let eye = cam.eye();
         let fwd = cam.forward();
         let ortho = cam.orthographic();
@@ -343,7 +331,8 @@ impl<'a> Exact<'a> {
             let SheetKind::Mesh { delta, .. } = sh.kind else {
                 return false;
             };
-            let q = sh.v.map(|v| DVec3::from_array(self.s.vertices[v as usize].p));
+            let q =
+                sh.v.map(|v| DVec3::from_array(self.s.vertices[v as usize].p));
             // Toward fewer layers: outward.
             let out = (q[1] - q[0]).cross(q[2] - q[0]) * -(delta.signum() as f64);
             let to_eye = if ortho { -fwd } else { eye - q[0] };
@@ -358,7 +347,8 @@ impl<'a> Exact<'a> {
                 .then(|| alpha[y as usize * w + x as usize])
         };
         let outline = |f: &[u32; 4]| -> bool {
-            let ends = [f[0], f[1]].map(|v| cam.project(DVec3::from_array(self.s.vertices[v as usize].p)));
+            let ends =
+                [f[0], f[1]].map(|v| cam.project(DVec3::from_array(self.s.vertices[v as usize].p)));
             let [Some((a, _)), Some((b, _))] = ends else {
                 return false;
             };
@@ -369,7 +359,10 @@ impl<'a> Exact<'a> {
             }
             let (nx, ny) = (-dy / len * 1.5, dx / len * 1.5);
             let m = [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
-            match (alpha_at([m[0] + nx, m[1] + ny]), alpha_at([m[0] - nx, m[1] - ny])) {
+            match (
+                alpha_at([m[0] + nx, m[1] + ny]),
+                alpha_at([m[0] - nx, m[1] - ny]),
+            ) {
                 (Some(p), Some(q)) => p.min(q) < 0.02 && p.max(q) > 0.1,
                 (Some(p), None) | (None, Some(p)) => p > 0.1,
                 (None, None) => false,
@@ -414,7 +407,11 @@ impl<'a> Exact<'a> {
             let x = if flip { (half - v) / c } else { (v + half) / c };
             x.clamp(0.0, n[axis] as f64)
         };
-        let (x0, y0, z0) = (cell(at[0], 0, false), cell(at[1], 1, true), cell(at[2], 2, false));
+        let (x0, y0, z0) = (
+            cell(at[0], 0, false),
+            cell(at[1], 1, true),
+            cell(at[2], 2, false),
+        );
         let (tw, th) = match k {
             0 => (n[0], n[1]),
             1 => (n[2], n[1]),
@@ -451,6 +448,7 @@ impl<'a> Exact<'a> {
                             rgba: [0.0, 0.0, 0.0, 0.0],
                             half: f32::INFINITY,
                             sig: 1,
+                            cover: 0.0,
                         };
                     }
                     let c = self.with_lines(&hit, DVec3::from_array(p), dx, dy, line);
@@ -459,13 +457,17 @@ impl<'a> Exact<'a> {
                         rgba: [c[0], c[1], c[2], 1.0],
                         half: f32::INFINITY,
                         sig: 2 + hit.object as u32,
+                        cover: 1.0,
                     }
                 }
             }
         };
-        let first = blocks(w, h, MAX_SPACING.min(w).min(h).max(1), &|px, py, _: &mut Scratch| {
-            one(px as f64 + 0.5, py as f64 + 0.5)
-        });
+        let first = blocks(
+            w,
+            h,
+            MAX_SPACING.min(w).min(h).max(1),
+            &|px, py, _: &mut Scratch| one(px as f64 + 0.5, py as f64 + 0.5),
+        );
         let (k2, kk) = o.edge_samples();
         let mut img = vec![0f32; w * h * 4];
         img.par_chunks_mut(w * 4).enumerate().for_each(|(py, row)| {
@@ -507,7 +509,11 @@ impl<'a> Exact<'a> {
             return -1;
         };
         let idx = |v: f64, r: usize| (v.max(0.0) as usize).min(r - 1);
-        let (x, y, z) = (idx(p.x, self.n[0]), idx(p.y, self.n[1]), idx(p.z, self.n[2]));
+        let (x, y, z) = (
+            idx(p.x, self.n[0]),
+            idx(p.y, self.n[1]),
+            idx(p.z, self.n[2]),
+        );
         obj[x + self.n[0] * (y + self.n[1] * z)]
     }
 
@@ -524,7 +530,6 @@ impl<'a> Exact<'a> {
         if v.w > 1e-3 {
             [v.x / v.w, v.y / v.w, v.z / v.w]
         } else {
-            stat(&PROBES);
             let hit = self.probe.probe(p.to_array());
             self.cued(hit.color, hit.depth)
         }
@@ -567,7 +572,6 @@ impl<'a> Exact<'a> {
                 return false;
             }
         }
-        stat(&VISIBILITY);
         let hit = self.probe.probe(c.p.to_array());
         hit.hit && (hit.depth - d).abs() <= 1e-5 * d.abs().max(1e-12) + 1e-9
     }
@@ -622,7 +626,6 @@ impl Exact<'_> {
     fn occludes(&self, c: &Crossing, outward: DVec3) -> bool {
         let sh = &self.s.sheets[c.sheet as usize];
         let d = self.s.depth(sh.v, c.b, c.p.to_array());
-        stat(&VISIBILITY);
         let hit = self.probe.probe((c.p + outward * 0.25).to_array());
         hit.hit && hit.depth > d + OCCLUSION_GAP * self.world_cell(d)
     }
@@ -701,7 +704,9 @@ fn blocks(
         .flat_map_iter(|&py| {
             let mut scratch = Scratch::default();
             let xs = &xs;
-            xs.iter().map(move |&px| eval(px, py, &mut scratch)).collect::<Vec<_>>()
+            xs.iter()
+                .map(move |&px| eval(px, py, &mut scratch))
+                .collect::<Vec<_>>()
         })
         .collect();
     let at = |i: usize, j: usize| lattice[j * xs.len() + i];
@@ -710,7 +715,11 @@ fn blocks(
     let mut bands: Vec<(usize, &mut [Sample])> = Vec::with_capacity(ys.len());
     let mut rest = &mut out[..];
     for j in 0..ys.len() - 1 {
-        let rows = if j + 2 == ys.len() { h - ys[j] } else { ys[j + 1] - ys[j] };
+        let rows = if j + 2 == ys.len() {
+            h - ys[j]
+        } else {
+            ys[j + 1] - ys[j]
+        };
         let (a, b) = std::mem::take(&mut rest).split_at_mut(rows * w);
         bands.push((j, a));
         rest = b;
@@ -722,7 +731,14 @@ fn blocks(
         let mut put = |px: usize, py: usize, v: Sample| rows[(py - y0) * w + px] = v;
         for i in 0..xs.len() - 1 {
             let corners = [at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)];
-            let own = [if i + 2 == xs.len() { xs[i + 1] + 1 } else { xs[i + 1] }, y0 + nrows];
+            let own = [
+                if i + 2 == xs.len() {
+                    xs[i + 1] + 1
+                } else {
+                    xs[i + 1]
+                },
+                y0 + nrows,
+            ];
             block(
                 [xs[i], xs[i + 1]],
                 [y0, ys[j + 1]],
@@ -751,7 +767,10 @@ fn block(
     let ([x0, x1], [y0, y1]) = (x, y);
     let (xm, ym) = ((x0 + x1) / 2, (y0 + y1) / 2);
     if xm == x0 && ym == y0 {
-        for (k, (px, py)) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)].into_iter().enumerate() {
+        for (k, (px, py)) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)]
+            .into_iter()
+            .enumerate()
+        {
             if px < own[0] && py < own[1] {
                 put(px, py, c[k]);
             }
@@ -805,7 +824,12 @@ fn block(
 /// Bilinear interpolation of four samples (x0 y0, x1 y0, x0 y1, x1 y1) at (fx, fy); the
 /// half-opacity distance where all four are finite.
 fn bilinear(c: &[Sample; 4], fx: f32, fy: f32) -> Sample {
-    let w = [(1.0 - fx) * (1.0 - fy), fx * (1.0 - fy), (1.0 - fx) * fy, fx * fy];
+    let w = [
+        (1.0 - fx) * (1.0 - fy),
+        fx * (1.0 - fy),
+        (1.0 - fx) * fy,
+        fx * fy,
+    ];
     let rgba = std::array::from_fn(|k| {
         w[0] * c[0].rgba[k] + w[1] * c[1].rgba[k] + w[2] * c[2].rgba[k] + w[3] * c[3].rgba[k]
     });
@@ -814,7 +838,13 @@ fn bilinear(c: &[Sample; 4], fx: f32, fy: f32) -> Sample {
     } else {
         f32::INFINITY
     };
-    Sample { rgba, half, sig: c[0].sig }
+    let cover = w[0] * c[0].cover + w[1] * c[1].cover + w[2] * c[2].cover + w[3] * c[3].cover;
+    Sample {
+        rgba,
+        half,
+        sig: c[0].sig,
+        cover,
+    }
 }
 
 /// Whether pixel (px, py) of `first` differs from one of its four neighbours: in what its ray
@@ -882,7 +912,6 @@ impl Ctx<'_, '_> {
         let mut groups: Vec<(u32, Sample, u32)> = Vec::with_capacity(4);
         let mut cands = std::mem::take(&mut scratch.cands);
         self.vs.candidates(px, py, &mut cands);
-        stat(&EDGES);
         for (dx, dy) in pattern(px, py, k) {
             let walked = self.walk(px as f64 + dx, py as f64 + dy, Some(&cands), scratch);
             let (key, walked) = match walked {
@@ -903,10 +932,12 @@ impl Ctx<'_, '_> {
         let mut acc = [0f32; 4];
         let mut half = f32::INFINITY;
         let mut sig = 0u32;
+        let mut cover = 0f32;
         for (_, s, count) in &groups {
             for c in 0..4 {
                 acc[c] += s.rgba[c] * *count as f32;
             }
+            cover += s.cover * *count as f32;
             half = half.min(s.half);
             sig = sig.wrapping_add(s.sig);
         }
@@ -915,6 +946,7 @@ impl Ctx<'_, '_> {
             rgba: acc.map(|v| v / kk),
             half,
             sig,
+            cover: cover / kk,
         }
     }
 
@@ -939,7 +971,6 @@ impl Ctx<'_, '_> {
         scratch: &mut Scratch,
     ) -> Option<(DVec3, DVec3, u32, u32)> {
         let ex = self.ex;
-        stat(&WALKS);
         let (org, dir, fwd_only) = self.cam.ray_at(x, y);
         let (tb0, tb1) = clip_box(org, dir, ex.n, fwd_only)?;
         // The part of the ray inside the cutaway, removed from the covered region.
@@ -1083,7 +1114,9 @@ impl Ctx<'_, '_> {
             (Event::Region(_, true, _), CompositeMode::Volume) => self.o.opacity >= 1.0,
             (Event::Surface(i), CompositeMode::FirstHit | CompositeMode::Volume) => {
                 let obj = ex.s.sheets[cross[i].sheet as usize].object;
-                ex.s.looks.get(obj as usize).is_some_and(|l| l.opacity >= 1.0)
+                ex.s.looks
+                    .get(obj as usize)
+                    .is_some_and(|l| l.opacity >= 1.0)
             }
             _ => false,
         };
@@ -1097,7 +1130,11 @@ impl Ctx<'_, '_> {
                     let sh = &ex.s.sheets[cross[i].sheet as usize];
                     let q = sh.v.map(|v| DVec3::from_array(ex.s.vertices[v as usize].p));
                     let n = (q[1] - q[0]).cross(q[2] - q[0]).normalize_or_zero();
-                    let n = if n.x < 0.0 || (n.x == 0.0 && n.y < 0.0) { -n } else { n };
+                    let n = if n.x < 0.0 || (n.x == 0.0 && n.y < 0.0) {
+                        -n
+                    } else {
+                        n
+                    };
                     let quant = |v: f64| ((v + 1.0) * 64.0) as u32;
                     5 + quant(n.x) * 7919 + quant(n.y) * 104_729 + quant(n.z) * 1_299_709
                 }
@@ -1118,7 +1155,11 @@ impl Ctx<'_, '_> {
                 let sh = &ex.s.sheets[cross[i as usize].sheet as usize];
                 let q = sh.v.map(|v| DVec3::from_array(ex.s.vertices[v as usize].p));
                 let n = (q[1] - q[0]).cross(q[2] - q[0]).normalize_or_zero();
-                let n = if n.x < 0.0 || (n.x == 0.0 && n.y < 0.0) { -n } else { n };
+                let n = if n.x < 0.0 || (n.x == 0.0 && n.y < 0.0) {
+                    -n
+                } else {
+                    n
+                };
                 let quant = |v: f64| ((v + 1.0) * 4.0) as u32;
                 sig ^ (1 + quant(n.x) + 9 * quant(n.y) + 81 * quant(n.z)).wrapping_mul(0x85EB_CA6B)
             }
@@ -1131,7 +1172,6 @@ impl Ctx<'_, '_> {
     /// `scratch`.
     fn integrate(&self, org: DVec3, dir: DVec3, mut sig: u32, scratch: &Scratch) -> Sample {
         let ex = self.ex;
-        stat(&INTEGRATES);
         let (cross, events) = (&scratch.cross, &scratch.events);
         let fwd = dir.dot(self.cam.forward());
         let mut layers = Layers::new();
@@ -1154,7 +1194,6 @@ impl Ctx<'_, '_> {
                                 .unwrap_or(t);
                             let eps = (1e-4 * ex.unit).min(0.5 * (next - t));
                             let p = org + dir * (t + eps);
-                            stat(&PROBES);
                             let hit = ex.probe.probe(p.to_array());
                             let c = if hit.hit {
                                 let (dx, dy) = self.cam.pixel_steps(p);
@@ -1220,6 +1259,7 @@ impl Ctx<'_, '_> {
             rgba: layers.rgba(),
             half: (layers.half * fwd) as f32,
             sig,
+            cover: if layers.trans < 1.0 { 1.0 } else { 0.0 },
         }
     }
 
@@ -1232,7 +1272,10 @@ impl Ctx<'_, '_> {
             return false;
         };
         if let Some((col, d)) = ex.probe.surface(sh.object, triangle, c.b) {
-            let a = ex.s.looks.get(sh.object as usize).map_or(1.0, |l| l.opacity);
+            let a =
+                ex.s.looks
+                    .get(sh.object as usize)
+                    .map_or(1.0, |l| l.opacity);
             *sig = sig.wrapping_mul(31).wrapping_add(11 + sh.object);
             layers.add(ex.cued(col, d), a, c.t);
         }

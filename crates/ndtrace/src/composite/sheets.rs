@@ -96,7 +96,12 @@ impl ViewSheets {
     /// The sheets of `s` seen by `cam`, those that can meet the retina's box `n` (cells); `None`
     /// when a sheet in the box reaches behind a perspective camera's eye (then the picture is
     /// drawn from the retina's cells).
-    pub(super) fn new(s: &Structure, looks: &[ObjectLook], cam: &Camera3, n: [usize; 3]) -> Option<Self> {
+    pub(super) fn new(
+        s: &Structure,
+        looks: &[ObjectLook],
+        cam: &Camera3,
+        n: [usize; 3],
+    ) -> Option<Self> {
         let ortho = cam.orthographic();
         let (w, h) = cam.size();
         let near = cam.near();
@@ -171,7 +176,10 @@ impl ViewSheets {
             return None;
         }
         let tris: Vec<Tri> = tris.into_iter().flatten().flatten().collect();
-        let xy: Vec<[f64; 2]> = projected.iter().map(|o| o.map_or([0.0; 2], |v| v.0)).collect();
+        let xy: Vec<[f64; 2]> = projected
+            .iter()
+            .map(|o| o.map_or([0.0; 2], |v| v.0))
+            .collect();
         let z: Vec<f64> = projected.iter().map(|o| o.map_or(1.0, |v| v.1)).collect();
         // 3. The tiles each triangle's (widened) box meets, counted then filled in triangle
         //    order (the lists, and so every crossing's order of discovery, are the same for
@@ -181,13 +189,24 @@ impl ViewSheets {
             let r = t.radius + 1e-6;
             let xs = t.v.map(|k| xy[k as usize][0]);
             let ys = t.v.map(|k| xy[k as usize][1]);
-            let (x0, x1) = (xs[0].min(xs[1]).min(xs[2]) - r, xs[0].max(xs[1]).max(xs[2]) + r);
-            let (y0, y1) = (ys[0].min(ys[1]).min(ys[2]) - r, ys[0].max(ys[1]).max(ys[2]) + r);
+            let (x0, x1) = (
+                xs[0].min(xs[1]).min(xs[2]) - r,
+                xs[0].max(xs[1]).max(xs[2]) + r,
+            );
+            let (y0, y1) = (
+                ys[0].min(ys[1]).min(ys[2]) - r,
+                ys[0].max(ys[1]).max(ys[2]) + r,
+            );
             if x1 < 0.0 || y1 < 0.0 || x0 > w as f64 || y0 > h as f64 {
                 return None;
             }
             let tile = |v: f64, count: usize| ((v.max(0.0) / TILE as f64) as usize).min(count - 1);
-            Some([tile(x0, cols), tile(x1, cols), tile(y0, rows), tile(y1, rows)])
+            Some([
+                tile(x0, cols),
+                tile(x1, cols),
+                tile(y0, rows),
+                tile(y1, rows),
+            ])
         };
         let spans: Vec<Option<[usize; 4]>> = tris.par_iter().map(span).collect();
         let mut counts = vec![0u32; cols * rows + 1];
@@ -294,7 +313,11 @@ impl ViewSheets {
             let mut inside = true;
             for k in 0..3 {
                 let (i0, i1) = (t.v[k], t.v[(k + 1) % 3]);
-                let (lo, hi, sign) = if i0 < i1 { (i0, i1, 1.0) } else { (i1, i0, -1.0) };
+                let (lo, hi, sign) = if i0 < i1 {
+                    (i0, i1, 1.0)
+                } else {
+                    (i1, i0, -1.0)
+                };
                 let f = sign * orient(self.xy[lo as usize], self.xy[hi as usize], q);
                 e[(k + 2) % 3] = f;
                 if !(f > 0.0 || (f == 0.0 && sign > 0.0)) {

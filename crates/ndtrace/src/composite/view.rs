@@ -61,7 +61,11 @@ impl<'a> View3<'a> {
                 opts.mode,
                 CompositeMode::FirstHit | CompositeMode::Volume | CompositeMode::Illustrative
             );
-            if shape.len() == 3 && opts.detail == Detail::Scene && exact_modes {
+            if shape.len() == 3
+                && opts.detail == Detail::Scene
+                && exact_modes
+                && opts.cubes.is_none()
+            {
                 return Self::exact(probe, rgba, depth, shape, extras, cells, opts);
             }
         }
@@ -87,7 +91,8 @@ impl<'a> View3<'a> {
             })
         };
         let sections = (opts.layout == ViewLayout::Sections).then(plain);
-        let illustrative = opts.mode == CompositeMode::Illustrative;
+        // Cubes draw the cells themselves, whatever the mode.
+        let illustrative = opts.mode == CompositeMode::Illustrative && opts.cubes.is_none();
         // The framing box: the occupied cells before any cutaway, so a cut does not move the
         // object in the picture.
         let mut frame = None;
@@ -267,6 +272,13 @@ impl<'a> View3<'a> {
                 paste(&mut img, w, &right, wr, wl, 0, wr, h);
                 img
             }
+            ViewLayout::Slice => {
+                let wl = w / 2;
+                let left = self.view(&sized(wl, h, opts.azimuth));
+                let mut img = vec![0f32; w * h * 4];
+                paste(&mut img, w, &left, wl.max(1), 0, 0, wl, h);
+                img
+            }
             ViewLayout::Sections => {
                 let (wl, wr, ht, hb) = (w / 2, w - w / 2, h / 2, h - h / 2);
                 let mut img = vec![0f32; w * h * 4];
@@ -301,7 +313,7 @@ impl<'a> View3<'a> {
         let bg = opts.background.map(|x| x as f32);
         let cam = Camera3::new(self.n, self.frame, opts);
         if let Some(ex) = &self.exact {
-            if let Some((mut img, half)) = ex.view(&cam, self.mode, opts) {
+            if let Some((mut img, half, cover)) = ex.view(&cam, self.mode, opts) {
                 let mut pixels = project(&self.edges, &cam);
                 if self.mode == CompositeMode::Illustrative && opts.edges {
                     let alpha: Vec<f32> = img.iter().skip(3).step_by(4).copied().collect();
@@ -318,7 +330,17 @@ impl<'a> View3<'a> {
                     pixels.extend(project(&outline, &cam));
                 }
                 if !pixels.is_empty() {
+                    let under = img.clone();
                     overlay::draw(&mut img, opts.size.0, &pixels, Some(&half), opts);
+                    // The lines end at the object's outline, where its coverage does: nothing
+                    // is drawn beyond it (a line on the silhouette shows its inner half).
+                    for (i, &c) in cover.iter().enumerate() {
+                        if c < 1.0 {
+                            for k in i * 4..i * 4 + 4 {
+                                img[k] = under[k] + (img[k] - under[k]) * c;
+                            }
+                        }
+                    }
                 }
                 return img;
             }
@@ -345,7 +367,12 @@ impl<'a> View3<'a> {
                 &classified
             }
         };
-        let (mut img, half) = render_view(grid, &cam, self.mode, opts, bg, !self.edges.is_empty());
+        let (mut img, half) = match opts.cubes {
+            Some(c) => {
+                super::cubes::render_cubes(grid, &cam, opts, c.size, bg, !self.edges.is_empty())
+            }
+            None => render_view(grid, &cam, self.mode, opts, bg, !self.edges.is_empty()),
+        };
         if !self.edges.is_empty() {
             let pixels = project(&self.edges, &cam);
             overlay::draw(&mut img, opts.size.0, &pixels, half.as_deref(), opts);

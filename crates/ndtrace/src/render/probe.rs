@@ -24,16 +24,20 @@ use crate::composite::{
 };
 use crate::linalg::{add, dot, mat_vec, norm, scale, sub, Rgb, Vector};
 use crate::ray::{Hit, Ray};
-use crate::scene::desc::RenderMode;
+use crate::scene::desc::{RenderMode, Shading};
 use crate::scene::Scene;
 use rayon::prelude::*;
 
 /// Ridges bent by more than this (degrees) count toward an object's share of creases.
 const BENT: f64 = 1.0;
 
+/// The dimension of the scenes pictures ask (a 3D retina): the code below is compiled once,
+/// for it ([`crate::dim::same_ref`]).
+const N: usize = 4;
+
 /// A 4D scene as its pictures ask it ([`SceneProbe`]): the structure of its objects in its
 /// retina, and the nearest hit of the ray through any retina point.
-pub struct ScenePicture<'a, const N: usize> {
+pub struct ScenePicture<'a> {
     scene: &'a Scene<N>,
     /// Per global simplex id: back-face culling removes it (when the scene culls).
     culled: Option<Vec<bool>>,
@@ -41,10 +45,13 @@ pub struct ScenePicture<'a, const N: usize> {
     depth_range: (f64, f64),
 }
 
-impl<'a, const N: usize> ScenePicture<'a, N> {
-    /// The pictures' view of `scene`; `None` unless N = 4 (a 3D retina).
-    pub fn new(scene: &'a Scene<N>) -> Option<Self> {
-        if N != 4 {
+impl<'a> ScenePicture<'a> {
+    /// The pictures' view of `scene`; `None` unless it is 4D (a 3D retina) and without clip
+    /// hyperplanes (a clipped object is open where its clips cut it, which its sheets do not
+    /// say: its pictures are drawn from the retina's cells).
+    pub fn new<const M: usize>(scene: &'a Scene<M>) -> Option<Self> {
+        let scene = crate::dim::same_ref::<Scene<M>, Scene<N>>(scene)?;
+        if scene.clips.active() {
             return None;
         }
         Some(ScenePicture {
@@ -119,12 +126,14 @@ impl<'a, const N: usize> ScenePicture<'a, N> {
                 std::array::from_fn(|k| if k < N { 0.5 + 0.5 * n[k] } else { 0.5 })
             }
             RenderMode::PrimitiveId => id_color(hit.prim),
-            RenderMode::Barycentric => std::array::from_fn(|k| if k < N { hit.bary[k] } else { 0.0 }),
+            RenderMode::Barycentric => {
+                std::array::from_fn(|k| if k < N { hit.bary[k] } else { 0.0 })
+            }
         }
     }
 }
 
-impl<const N: usize> ScenePicture<'_, N> {
+impl ScenePicture<'_> {
     /// The lighting of [`shade_hit`] split by its linearity in the colour C: (F, S) with
     /// c(C) = C ∘ F + S — the same lights, shadows and terms, so that a texture line's colour
     /// is shaded as the hit is.
@@ -167,12 +176,19 @@ impl<const N: usize> ScenePicture<'_, N> {
     fn lines(&self, ray: &Ray<N>, hit: &Hit<N>, obj: usize, local: usize) -> Option<TextureLines> {
         let o = &self.scene.objects[obj];
         let t = o.texture.as_ref()?;
+        // Gouraud's lighting is not linear in the colour at a point: its lines stay the
+        // tracer's own.
+        if self.scene.render.shading == Shading::Gouraud {
+            return None;
+        }
         if t.isolines.is_none() && t.lattice.is_none() {
             return None;
         }
         let idx = &o.mesh.simplices[local];
         let value = t.values.as_ref().map(|vals| {
-            (0..N).map(|k| hit.bary[k] * vals[idx[k] as usize]).sum::<f64>()
+            (0..N)
+                .map(|k| hit.bary[k] * vals[idx[k] as usize])
+                .sum::<f64>()
         });
         let base = match (value, &t.colormap) {
             (Some(v), Some((map, [lo, hi]))) => map.at((v - lo) / (hi - lo)),
@@ -208,14 +224,18 @@ impl<const N: usize> ScenePicture<'_, N> {
         if let Some(lat) = &t.lattice {
             let p = add(&mat_vec(&t.to_object.0, &ray.at(hit.t)), &t.to_object.1);
             for &u in p.iter().take(3) {
-                push(u, lat.spacing * (u / lat.spacing).round(), shade(&lat.color));
+                push(
+                    u,
+                    lat.spacing * (u / lat.spacing).round(),
+                    shade(&lat.color),
+                );
             }
         }
         Some(out)
     }
 }
 
-impl<const N: usize> SceneProbe for ScenePicture<'_, N> {
+impl SceneProbe for ScenePicture<'_> {
     fn structure(&self, crease_angle: f64) -> Structure {
         let scene = self.scene;
         let cam = self.camera();
@@ -237,14 +257,19 @@ impl<const N: usize> SceneProbe for ScenePicture<'_, N> {
         let in_box = |v: &SheetVertex| (0..3).all(|k| v.p[k] >= 0.0 && v.p[k] <= res[k] as f64);
         for (o, obj) in scene.objects.iter().enumerate() {
             let base = out.vertices.len() as u32;
-            let projected: Vec<Option<SheetVertex>> =
-                obj.mesh.vertices.par_iter().map(|x| self.project(x)).collect();
+            let projected: Vec<Option<SheetVertex>> = obj
+                .mesh
+                .vertices
+                .par_iter()
+                .map(|x| self.project(x))
+                .collect();
             let vertex = |i: u32| projected[i as usize];
-            out.vertices.extend(
-                projected
-                    .iter()
-                    .map(|v| v.unwrap_or(SheetVertex { p: [f64::NAN; 3], z: f64::NAN })),
-            );
+            out.vertices.extend(projected.iter().map(|v| {
+                v.unwrap_or(SheetVertex {
+                    p: [f64::NAN; 3],
+                    z: f64::NAN,
+                })
+            }));
             if let Some(s) = &obj.surface {
                 out.looks.push(ObjectLook {
                     smooth: true,
@@ -283,10 +308,9 @@ impl<const N: usize> SceneProbe for ScenePicture<'_, N> {
             if outside {
                 out.counted = false;
             }
-            let Ok(ridges) =
-                scene
-                    .edge_cache
-                    .ridges(o, &obj.mesh.vertices, &obj.mesh.simplices)
+            let Ok(ridges) = scene
+                .edge_cache
+                .ridges(o, &obj.mesh.vertices, &obj.mesh.simplices)
             else {
                 out.counted = false;
                 out.looks.push(ObjectLook {
@@ -340,7 +364,12 @@ impl<const N: usize> SceneProbe for ScenePicture<'_, N> {
                         crease = c < cos_crease;
                     }
                     let pv = v.map(vertex);
-                    let Some([a, b, c]) = pv.iter().copied().collect::<Option<Vec<_>>>().map(|x| [x[0], x[1], x[2]]) else {
+                    let Some([a, b, c]) = pv
+                        .iter()
+                        .copied()
+                        .collect::<Option<Vec<_>>>()
+                        .map(|x| [x[0], x[1], x[2]])
+                    else {
                         return (None, bent, crease);
                     };
                     let pa = glam::DVec3::from_array(a.p);
@@ -453,14 +482,22 @@ impl<const N: usize> SceneProbe for ScenePicture<'_, N> {
             }
             Projection::Orthographic => b,
         };
-        let point: Vector<N> = std::array::from_fn(|i| w[0] * x[0][i] + w[1] * x[1][i] + w[2] * x[2][i]);
+        let point: Vector<N> =
+            std::array::from_fn(|i| w[0] * x[0][i] + w[1] * x[1][i] + w[2] * x[2][i]);
         let cam = self.camera();
         let (dir, depth, ray) = match cam.projection {
             Projection::Perspective => {
                 let rel = sub(&point, &cam.position);
                 let l = norm(&rel);
                 let dir: Vector<N> = std::array::from_fn(|i| rel[i] / l);
-                (dir, l, Ray { origin: cam.position, dir })
+                (
+                    dir,
+                    l,
+                    Ray {
+                        origin: cam.position,
+                        dir,
+                    },
+                )
             }
             Projection::Orthographic => {
                 let view = cam.axis(N - 1);

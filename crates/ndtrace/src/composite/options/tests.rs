@@ -35,6 +35,9 @@ detail = "retina"
 shape = "sphere"
 center = [0.0, 0.25, 0.0]
 radius = 0.5
+
+[cubes]
+size = 0.5
 "#;
 
 #[test]
@@ -71,6 +74,7 @@ fn every_key_sets_its_own_field_and_is_written_back() {
             center: [0.0, 0.25, 0.0],
             radius: 0.5,
         }),
+        cubes: Some(crate::composite::Cubes { size: 0.5 }),
         samples: 9,
         detail: Detail::Retina,
         given: GivenKeys::ALL,
