@@ -456,7 +456,7 @@ impl<'a> Exact<'a> {
                     Sample {
                         rgba: [c[0], c[1], c[2], 1.0],
                         half: f32::INFINITY,
-                        sig: 2 + hit.object as u32,
+                        sig: (2 + hit.object as u32) ^ bands(&hit),
                         cover: 1.0,
                     }
                 }
@@ -575,6 +575,24 @@ impl<'a> Exact<'a> {
         let hit = self.probe.probe(c.p.to_array());
         hit.hit && (hit.depth - d).abs() <= 1e-5 * d.abs().max(1e-12) + 1e-9
     }
+}
+
+/// Which side of each of its texture lines a hit lies on, hashed: two points on either side
+/// of a line differ, so that a block of pixels a thin line crosses is never interpolated over
+/// it (see [`blocks`]).
+fn bands(hit: &Probe) -> u32 {
+    let Some(l) = &hit.lines else {
+        return 0;
+    };
+    let mut h = 0u32;
+    for j in 0..l.count {
+        let side = u32::from(l.value[j] >= l.level[j]);
+        let level = (l.level[j] as f32).to_bits();
+        h = h
+            .wrapping_mul(0x9E37_79B1)
+            .wrapping_add(level.rotate_left(1) ^ side);
+    }
+    h.wrapping_mul(0x85EB_CA6B)
 }
 
 /// The width, picture pixels, of texture lines drawn by a picture: 0.6 of the edges'.
@@ -1202,14 +1220,13 @@ impl Ctx<'_, '_> {
                             } else {
                                 ex.color_at(p)
                             };
-                            sig = sig.wrapping_mul(31).wrapping_add(7 + hit.object as u32);
+                            sig = sig.wrapping_mul(31).wrapping_add(7 + hit.object as u32)
+                                ^ bands(&hit);
                             layers.add(c, 1.0, t);
                             break;
                         }
-                        Event::Surface(i) => {
-                            if self.surface(&cross[i], &mut layers, &mut sig) {
-                                break;
-                            }
+                        Event::Surface(i) if self.surface(&cross[i], &mut layers, &mut sig) => {
+                            break;
                         }
                         _ => {}
                     }

@@ -395,12 +395,13 @@ fn vertex_rows<'a, const N: usize>(v: &'a Rows<f64>, path: &str) -> R<Cow<'a, [f
     })
 }
 
+/// A surface's mesh, triangles and widths (the sheet's in the retina, the line's in pictures).
+type SurfaceParts<const N: usize> = (Mesh<N>, Vec<[u32; 3]>, (f64, f64));
+
 /// A `surface` object (dim = 4): its vertices as a mesh without simplices, its triangles (those
-/// without area dropped, counted in the second value) and its sheet width.
-fn surface_mesh<const N: usize>(
-    o: &ObjectDesc,
-    path: &str,
-) -> R<(Mesh<N>, Vec<[u32; 3]>, (f64, f64))> {
+/// without area dropped, counted in the second value), its sheet width in the retina and its
+/// least line width in pictures.
+fn surface_mesh<const N: usize>(o: &ObjectDesc, path: &str) -> R<SurfaceParts<N>> {
     if N != 4 {
         return Err(PathError::new(
             format!("{path}.shape"),
