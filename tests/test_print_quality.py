@@ -250,3 +250,23 @@ def test_samples_and_detail_options():
     with pytest.raises(ValueError, match="detail"):
         ndtrace.composite(np.zeros((4, 4, 4, 4), np.float32), detail="cells")
     assert os.path.exists(SCENES)
+
+
+def test_surface_width_in_retina_cells_still_loads_and_does_not_change_pictures():
+    # `width` (retina cells) is what the retina holds: a scene file that sets it keeps working,
+    # with a warning naming `line_width`, and a picture drawn from the scene does not change
+    # with it (it draws the surface at `line_width` picture pixels), while the grid path does.
+    v, t = ndtrace.surfaces.clifford_torus(24)
+
+    def picture(width, detail):
+        scene = (ndtrace.Scene(4)
+                 .set_camera([0.3, 0.4, 0.5, 2.5], look_at=[0, 0, 0, 0], up=[[0, 1, 0, 0], [0, 0, 1, 0]],
+                             fov=45, resolution=32)
+                 .add_light("directional", direction=[0.2, 0.3, 0.5, 1.0])
+                 .add_object("surface", vertices=v, triangles=t, width=width))
+        with pytest.warns(UserWarning, match="line_width"):
+            retina = ndtrace.trace(scene)
+        return ndtrace.composite(retina, mode="first_hit", size=(256, 256), detail=detail)
+
+    np.testing.assert_array_equal(picture(1.0, "scene"), picture(4.0, "scene"))
+    assert np.abs(picture(1.0, "retina")[..., 3] - picture(4.0, "retina")[..., 3]).mean() > 0.01
