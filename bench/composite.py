@@ -12,7 +12,19 @@ Prints, for two synthetic 128³ retinas and at 1 and 2 threads, the best of 3 wa
 * ``cloud``: a procedural volume, smooth noise-like alpha in (0, 0.25] filling the whole cube
   (the worst case for the volume mode: no empty space, no early termination).
 
-Usage:  python bench/composite.py [--res 128] [--size 1024]
+Then, with ``--pictures`` (or alone with ``--only-pictures``), the figures of issue 47: the
+wall time of a picture at 1024² drawn from its scene (``detail="scene"``, the default) beside
+the same picture from the retina's cells (``detail="retina"``, the grid path), each trace +
+composite, best of 3:
+
+* the tesseract (``scenes/tesseract.toml``, its 64³ retina, 4 samples), default picture;
+* the 3-sphere of 1,572,864 tetrahedra (``bench/build.py``'s ``sphere3``: the tesseract's
+  boundary cut into 32³ cubes per cell, projected onto S³) under the camera, light and
+  composite of ``scenes/sphere3.toml``, after its build (the first composite also finds its
+  ridges: printed apart);
+* the bear-haired Clifford torus (``scenes/clifford_torus_hair.py``, 80³, first_hit).
+
+Usage:  python bench/composite.py [--res 128] [--size 1024] [--pictures | --only-pictures]
 """
 
 from __future__ import annotations
@@ -66,12 +78,56 @@ def best(f, repeat: int = 3) -> float:
     return min(times)
 
 
+def pictures(size: tuple[int, int]) -> None:
+    """Issue 47's figures: trace + composite at `size`, from the scene and from the cells."""
+    import importlib
+    import os
+    import runpy
+    import sys
+
+    here = os.path.dirname(os.path.abspath(__file__))
+    scenes = os.path.join(here, "..", "scenes")
+    sys.path.insert(0, here)
+    from build import sphere3
+
+    def with_options(scene):
+        return dict(importlib.import_module("ndtrace.composite").scene_options(scene.to_dict()), size=size)
+
+    tesseract = ndtrace.load_file(os.path.join(scenes, "tesseract.toml"))
+    v, t = sphere3(32)
+    desc = ndtrace.load_file(os.path.join(scenes, "sphere3.toml")).to_dict()
+    desc["objects"] = [dict(desc["objects"][0], shape="mesh", vertices=v, simplices=t)]
+    desc["objects"][0].pop("subdivisions", None)
+    t0 = time.perf_counter()
+    big = ndtrace.load_dict(desc)
+    big.compiled()
+    print(f"3-sphere of {len(t):,} tetrahedra built in {time.perf_counter() - t0:.2f} s")
+    t0 = time.perf_counter()
+    ndtrace.composite(ndtrace.trace(big), **with_options(big))
+    print(f"3-sphere: first trace + composite (finds its ridges) {time.perf_counter() - t0:.2f} s")
+    hair = runpy.run_path(os.path.join(scenes, "clifford_torus_hair.py"))["scene"]()
+    hair.compiled()
+    print(f"{'picture':<28} {'from the scene s':>16} {'from the cells s':>16}   (trace + composite, {size[0]}×{size[1]})")
+    for name, scene in (("tesseract (64³)", tesseract), ("3-sphere 1.57 M tets (64³)", big),
+                        ("Clifford torus hair (80³)", hair)):
+        opts = with_options(scene)
+        times = []
+        for detail in ("scene", "retina"):
+            times.append(best(lambda: ndtrace.composite(ndtrace.trace(scene), detail=detail, **opts)))
+        print(f"{name:<28} {times[0]:>16.3f} {times[1]:>16.3f}", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--res", type=int, default=128)
     ap.add_argument("--size", type=int, default=1024)
+    ap.add_argument("--pictures", action="store_true", help="also issue 47's figures")
+    ap.add_argument("--only-pictures", action="store_true", help="only issue 47's figures")
     a = ap.parse_args()
     size = (a.size, a.size)
+    if a.only_pictures:
+        pictures(size)
+        return
     t = time.perf_counter()
     sphere = traced_sphere(a.res)
     print(f"traced a {a.res}³ retina of a 4D sphere in {time.perf_counter() - t:.2f} s "
@@ -94,6 +150,8 @@ def main() -> None:
         t1 = best(lambda: ndtrace.composite(retina, size=size, threads=1, **kw))
         t2 = best(lambda: ndtrace.composite(retina, size=size, threads=2, **kw))
         print(f"{name:<9} {label:<22} {t1:>10.3f} {t2:>11.3f} {t1 / t2:>8.2f}", flush=True)
+    if a.pictures:
+        pictures(size)
 
 
 if __name__ == "__main__":

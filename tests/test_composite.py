@@ -90,7 +90,10 @@ def test_volume_picture_has_the_object_in_the_middle(tesseract):
     bg = np.array([0.05, 0.1, 0.15])
     img = ndtrace.composite(tesseract, size=(64, 48), background=bg)
     alpha = img[..., 3]
-    assert alpha[24, 32] > 0.9
+    # Drawn from the scene (the default), the illustrative interior is nearly clear, the
+    # creases and contours behind the centre inked: well covered, not opaque.
+    assert alpha[24, 32] > 0.5
+    assert ndtrace.composite(tesseract, size=(64, 48), background=bg, detail="retina")[24, 32, 3] > 0.9
     # Corners: background, nothing in front of it.
     for y, x in [(0, 0), (0, 63), (47, 0), (47, 63)]:
         np.testing.assert_allclose(img[y, x], [*bg, 0.0], atol=1e-7)

@@ -194,6 +194,8 @@ def composite(
     normal: npt.NDArray[np.float32] | None = None,
     camera: dict[str, object] | None = None,
     edges: npt.NDArray[np.float64] | None = None,
+    scene: CompiledScene | None = None,
+    object_id: npt.NDArray[np.int32] | None = None,
 ) -> npt.NDArray[np.float32]: ...
 def picture_edges(
     rgba: npt.NDArray[np.float32],
@@ -203,6 +205,8 @@ def picture_edges(
     normal: npt.NDArray[np.float32] | None = None,
     camera: dict[str, object] | None = None,
     edges: npt.NDArray[np.float64] | None = None,
+    scene: CompiledScene | None = None,
+    object_id: npt.NDArray[np.int32] | None = None,
 ) -> npt.NDArray[np.float64]: ...
 def composite_defaults() -> dict[str, Any]: ...
 def check_composite(options: dict[str, object], name: str) -> None: ...

@@ -39,6 +39,8 @@ def composite(
     zoom: float = 1.0,
     step: float = 0.5,
     rays_per_cell: int = 1,
+    samples: int = 0,
+    detail: str = "scene",
     stages: Sequence[tuple[float, float]] | None = None,
     strip_height: int = 32,
     labels: bool = True,
@@ -187,7 +189,7 @@ def composite(
         size = (shape[1], shape[0]) if len(shape) == 2 else (shape[0], strip_height) if len(shape) == 1 else (512, 512)
     options = dict(mode=mode, azimuth=azimuth, elevation=elevation, distance=distance, zoom=zoom,
                    projection=projection, size=size, opacity=opacity, step=step,
-                   rays_per_cell=rays_per_cell, depth_cue=depth_cue,
+                   rays_per_cell=rays_per_cell, samples=samples, detail=detail, depth_cue=depth_cue,
                    axis=axis, strip_height=strip_height, labels=labels, fit=fit,
                    crease_angle=crease_angle, edges=edges, edge_width=edge_width,
                    hidden_edges=hidden_edges, layout=layout, section=section,
@@ -202,13 +204,16 @@ def composite(
         options["stages"] = stages
     if edge_color is not None:
         options["edge_color"] = edge_color
-    normal = camera = lines = None
+    normal = camera = lines = source = objects = None
     if isinstance(retina, Retina) and mode == "illustrative" and len(shape) >= 3:
         normal = float32_array("retina.normal", retina.normal)
         camera = retina._camera_info()
         if edges:
             lines = retina._edges(crease_angle)
-    return _ndtrace.composite(rgba, depth, plain(options), threads, normal, camera, lines)
+    if isinstance(retina, Retina) and detail == "scene" and retina._source is not None and len(shape) == 3:
+        source = retina._source
+        objects = np.ascontiguousarray(retina.object_id, dtype=np.int32)
+    return _ndtrace.composite(rgba, depth, plain(options), threads, normal, camera, lines, source, objects)
 
 
 def scene_options(description: dict) -> dict:

@@ -112,7 +112,8 @@ class Scene:
         """Adds an object: a generated shape (``"simplex"``, ``"hypercube"``,
         ``"cross_polytope"``, ``"sphere"`` with ``subdivisions``), ``"surface"`` (dim 4: a
         2-surface drawn directly, "bear hair", with ``vertices`` (V, 4), ``triangles`` (T, 3)
-        and ``width`` in retina cells; see ``docs/scene-format.md``) or ``"mesh"`` with
+        and ``line_width`` in picture pixels, or ``width`` in retina cells for the retina
+        alone; see ``docs/scene-format.md``) or ``"mesh"`` with
         ``vertices`` (V, N) and ``simplices`` (S, N), a ``file``, or a ``mesh`` object: anything
         with ``.vertices`` and ``.faces`` (trimesh), ``.points`` and ``.cells`` (meshio), or a
         pair ``(vertices, simplices)`` (see :func:`ndtrace.mesh.from_object`)."""

@@ -147,7 +147,10 @@ def picture(scene: Scene, retina: Retina, options: dict, *, threads: int | None 
     # The band reads on the surface the first-hit mode draws; the illustrative mode's nearly
     # clear cells would hide it: first_hit unless the scene's [composite] chooses a mode.
     given = data.get("composite") or {}
-    left_options = {**options, "mode": options.get("mode") if "mode" in given else "first_hit"}
+    # The band is painted into the retina's cells: the projection is drawn from them (the grid
+    # path; a picture drawn from the scene would show the scene's own colours there).
+    left_options = {**options, "mode": options.get("mode") if "mode" in given else "first_hit",
+                    "detail": "retina"}
     left = composite(_band(retina, cut["normal"], float(cut["offset"])), threads=threads,
                      **left_options)
     height, width = left.shape[:2]

@@ -67,9 +67,12 @@ def svg_text(scene_or_retina, *, fill: bool = True, threads: int | None = None, 
     angle = float(opts.get("crease_angle", 20.0))
     hidden = opts.get("hidden_edges", "dashed")
     keys = {k: v for k, v in opts.items() if v is not None}
+    source = retina._source if keys.get("detail", "scene") == "scene" and retina.rgba.ndim == 4 else None
+    objects = np.ascontiguousarray(retina.object_id, dtype=np.int32) if source is not None else None
     rows = np.asarray(_ndtrace.picture_edges(
         float32_array("retina.rgba", retina.rgba), float32_array("retina.depth", retina.depth), plain(keys),
-        threads, float32_array("retina.normal", retina.normal), retina._camera_info(), retina._edges(angle)))
+        threads, float32_array("retina.normal", retina.normal), retina._camera_info(), retina._edges(angle),
+        source, objects))
     defaults = _ndtrace.composite_defaults()
     w, h = (int(v) for v in (opts.get("size") or defaults["size"]))
     width = float(opts.get("edge_width") or 0.0) or max(1.0, min(w, h) / 300.0)

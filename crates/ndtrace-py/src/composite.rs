@@ -5,13 +5,16 @@
 //! them.
 
 use crate::errors::{guarded, to_py_err};
+use crate::scene::CompiledScene;
 use ndtrace::camera::Projection;
+use ndtrace::composite::SceneProbe;
 use ndtrace::composite::{
     self as core, CompositeMode, CompositeOptions, RetinaCamera, RetinaEdge, RetinaExtras,
     MAX_RETINA_DIM,
 };
+use ndtrace::render::probe::ScenePicture;
 use ndtrace::scene::{self, PathError};
-use ndtrace::{names, NdError};
+use ndtrace::{names, with_scene, NdError};
 use numpy::{PyArray1, PyArray4, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -32,6 +35,7 @@ struct Input<'a> {
     normal: Option<&'a [f32]>,
     camera: Option<RetinaCamera>,
     edges: Vec<RetinaEdge>,
+    object: Option<&'a [i32]>,
 }
 
 impl Input<'_> {
@@ -40,7 +44,28 @@ impl Input<'_> {
             normal: self.normal,
             camera: self.camera.clone(),
             edges: &self.edges,
+            object: self.object,
+            scene: None,
         }
+    }
+}
+
+/// Runs `f` with `extras` and, when `scene` is given, the scene as pictures ask it (N = 4).
+fn with_probe<T>(
+    scene: Option<&CompiledScene>,
+    extras: &RetinaExtras<'_>,
+    f: impl FnOnce(&RetinaExtras<'_>) -> T,
+) -> T {
+    match scene {
+        None => f(extras),
+        Some(cs) => with_scene!(cs.any(), s, _N => {
+            let picture = ScenePicture::new(s);
+            let probed = RetinaExtras {
+                scene: picture.as_ref().map(|p| p as &dyn SceneProbe),
+                ..extras.clone()
+            };
+            f(&probed)
+        }),
     }
 }
 
@@ -68,6 +93,7 @@ fn input<'a>(
     normal: &'a Option<Arr<'_>>,
     camera: Option<&Bound<'_, PyAny>>,
     edges: &Option<PyReadonlyArrayDyn<'_, f64>>,
+    object: &'a Option<PyReadonlyArrayDyn<'_, i32>>,
 ) -> PyResult<Input<'a>> {
     let dims = rgba.shape().to_vec();
     if dims.len() < 2 || dims[dims.len() - 1] != 4 {
@@ -145,6 +171,20 @@ fn input<'a>(
                 .collect()
         }
     };
+    let object = match object {
+        Some(o) => {
+            if o.shape() != shape.as_slice() {
+                return Err(PyValueError::new_err(format!(
+                    "object_id: expected shape {shape:?} (the retina's cells), got {:?}",
+                    o.shape()
+                )));
+            }
+            Some(o.as_slice().map_err(|_| {
+                PyValueError::new_err("object_id: expected a C-contiguous int32 array")
+            })?)
+        }
+        None => None,
+    };
     Ok(Input {
         shape,
         rgba,
@@ -152,6 +192,7 @@ fn input<'a>(
         normal,
         camera,
         edges,
+        object,
     })
 }
 
@@ -161,9 +202,11 @@ fn input<'a>(
 ///
 /// `normal` (the retina's `(..., N)` float32 normals), `camera` (a dict with `orientation`,
 /// N×N row-major floats, `cell` and `perspective`) and `edges` (float64 rows
-/// `[a (N−1), b (N−1), depth_a, depth_b, visible]`) are what the illustrative mode uses.
+/// `[a (N−1), b (N−1), depth_a, depth_b, visible]`) are what the illustrative mode uses;
+/// `scene` (the `CompiledScene` the retina was traced from) and `object_id` (its int32
+/// objects) what a picture drawn at its own resolution uses (`detail = "scene"`, N = 4).
 #[pyfunction]
-#[pyo3(signature = (rgba, depth=None, options=None, threads=None, normal=None, camera=None, edges=None))]
+#[pyo3(signature = (rgba, depth=None, options=None, threads=None, normal=None, camera=None, edges=None, scene=None, object_id=None))]
 #[allow(clippy::too_many_arguments)]
 fn composite<'py>(
     py: Python<'py>,
@@ -174,14 +217,21 @@ fn composite<'py>(
     normal: Option<Arr<'py>>,
     camera: Option<&Bound<'py, PyAny>>,
     edges: Option<PyReadonlyArrayDyn<'py, f64>>,
+    scene: Option<Bound<'py, CompiledScene>>,
+    object_id: Option<PyReadonlyArrayDyn<'py, i32>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let opts = options_arg(options)?;
-    let inp = input(&rgba, &depth, &normal, camera, &edges)?;
+    let inp = input(&rgba, &depth, &normal, camera, &edges, &object_id)?;
     let extras = inp.extras();
     let pool = crate::thread_pool(threads)?;
     let frames = opts.turntable;
+    let compiled = scene.as_ref().map(|b| b.get());
     if frames == 0 {
-        let run = || core::composite_retina(inp.rgba, inp.depth, &inp.shape, &extras, &opts);
+        let run = || {
+            with_probe(compiled, &extras, |extras| {
+                core::composite_retina(inp.rgba, inp.depth, &inp.shape, extras, &opts)
+            })
+        };
         let image = py.detach(|| {
             guarded("composite", || match &pool {
                 Some(p) => p.install(run),
@@ -207,15 +257,19 @@ fn composite<'py>(
             .as_slice_mut()
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let mut run = || {
-            core::composite_turntable_each(
-                inp.rgba,
-                inp.depth,
-                &inp.shape,
-                &extras,
-                &opts,
-                frames,
-                |k, image| flat[k * frame_len..(k + 1) * frame_len].copy_from_slice(&image.rgba),
-            )
+            with_probe(compiled, &extras, |extras| {
+                core::composite_turntable_each(
+                    inp.rgba,
+                    inp.depth,
+                    &inp.shape,
+                    extras,
+                    &opts,
+                    frames,
+                    |k, image| {
+                        flat[k * frame_len..(k + 1) * frame_len].copy_from_slice(&image.rgba)
+                    },
+                )
+            })
         };
         py.detach(|| {
             guarded("composite", || match &pool {
@@ -249,7 +303,7 @@ fn check_memory(bytes: f64, what: &str) -> PyResult<()> {
 /// y down), their N-D depths, the piece's linear RGB (at its middle's depth) as the picture
 /// draws it.
 #[pyfunction]
-#[pyo3(signature = (rgba, depth=None, options=None, threads=None, normal=None, camera=None, edges=None))]
+#[pyo3(signature = (rgba, depth=None, options=None, threads=None, normal=None, camera=None, edges=None, scene=None, object_id=None))]
 #[allow(clippy::too_many_arguments)]
 fn picture_edges<'py>(
     py: Python<'py>,
@@ -260,12 +314,19 @@ fn picture_edges<'py>(
     normal: Option<Arr<'py>>,
     camera: Option<&Bound<'py, PyAny>>,
     edges: Option<PyReadonlyArrayDyn<'py, f64>>,
+    scene: Option<Bound<'py, CompiledScene>>,
+    object_id: Option<PyReadonlyArrayDyn<'py, i32>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let opts = options_arg(options)?;
-    let inp = input(&rgba, &depth, &normal, camera, &edges)?;
+    let inp = input(&rgba, &depth, &normal, camera, &edges, &object_id)?;
     let extras = inp.extras();
     let pool = crate::thread_pool(threads)?;
-    let run = || core::picture_edges(inp.rgba, inp.depth, &inp.shape, &extras, &opts);
+    let compiled = scene.as_ref().map(|b| b.get());
+    let run = || {
+        with_probe(compiled, &extras, |extras| {
+            core::picture_edges(inp.rgba, inp.depth, &inp.shape, extras, &opts)
+        })
+    };
     let pieces = py.detach(|| {
         guarded("picture_edges", || match &pool {
             Some(p) => p.install(run),

@@ -24,6 +24,13 @@ pub struct CompiledScene {
     scene: AnyScene,
 }
 
+impl CompiledScene {
+    /// The built scene.
+    pub(crate) fn any(&self) -> &AnyScene {
+        &self.scene
+    }
+}
+
 #[pymethods]
 impl CompiledScene {
     /// Dimension N.

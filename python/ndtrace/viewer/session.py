@@ -527,6 +527,8 @@ class ViewSession:
             options["size"] = (max(1, round(w * self.draft_scale)), max(1, round(h * self.draft_scale)))
             if "step" in _parameters():  # march drafts one sample per cell (opacity is step-independent)
                 options["step"] = max(float(options.get("step", 0.5)), DRAFT_STEP)
+            if "detail" in _parameters():  # drafts from the retina's cells alone (the grid path)
+                options["detail"] = "retina"
         picture = composite(retina, threads=self.threads, **options)
         t3 = time.perf_counter()
         timings["composite"] = (t3 - t2) * 1e3

@@ -300,7 +300,7 @@ fn cues(
 /// Lightens (dark background) or darkens (light background) a colour by `k` ∈ [0, 1]: the ink
 /// of creases and silhouettes.
 #[inline]
-fn ink(c: [f32; 3], k: f32, dark_background: bool) -> [f32; 3] {
+pub(super) fn ink(c: [f32; 3], k: f32, dark_background: bool) -> [f32; 3] {
     if dark_background {
         c.map(|v| v + (1.0 - v).max(0.0) * 0.4 * k)
     } else {

@@ -48,6 +48,9 @@ pub mod illustrative;
 mod montage;
 mod options;
 pub mod overlay;
+pub mod picture;
+pub mod probe;
+mod sheets;
 mod stages;
 mod view;
 mod volume;
@@ -56,10 +59,14 @@ pub use aids::{Cubes, Cutaway, ViewLayout};
 pub use illustrative::RetinaCamera;
 pub use montage::{slice_layout, Layout, SEPARATOR};
 pub use options::{
-    CompositeMode, CompositeOptions, GivenKeys, HiddenEdges, OptionError, DEFAULT_DISTANCE,
-    MAX_PIXELS, MAX_TURNTABLE_FRAMES,
+    CompositeMode, CompositeOptions, Detail, GivenKeys, HiddenEdges, OptionError, DEFAULT_DISTANCE,
+    DEFAULT_SAMPLES, MAX_PIXELS, MAX_SAMPLES, MAX_TURNTABLE_FRAMES,
 };
 pub use overlay::{PixelEdge, RetinaEdge, MAX_RETINA_DIM};
+pub use probe::{
+    ObjectLook, Probe, SceneProbe, Sheet, SheetKind, SheetVertex, Structure, TextureLines,
+    MAX_TEXTURE_LINES,
+};
 pub use stages::DEFAULT_STAGE_DISTANCE;
 
 use crate::{NdError, NdResult};
@@ -103,9 +110,10 @@ impl Image {
 
 /// What a traced retina gives the compositor beyond its colours and depths (all optional): the
 /// unit N-D normal of each cell's nearest hit (`N` floats per cell, numpy order), its camera,
-/// and the pieces of the scene's feature edges in retina coordinates. The illustrative mode
-/// uses them; the other modes ignore them.
-#[derive(Debug, Clone, Default)]
+/// the pieces of the scene's feature edges in retina coordinates, each cell's object, and the
+/// scene itself. The illustrative mode uses the normals, camera and edges; a picture drawn at
+/// its own resolution ([`Detail::Scene`], N = 4) asks the scene and uses the objects.
+#[derive(Clone, Default)]
 pub struct RetinaExtras<'a> {
     /// `cells · N` floats: the shading normal of each cell (0 on a miss).
     pub normal: Option<&'a [f32]>,
@@ -113,6 +121,22 @@ pub struct RetinaExtras<'a> {
     pub camera: Option<RetinaCamera>,
     /// Feature-edge pieces to draw (see [`crate::edges::retina_edges`]).
     pub edges: &'a [RetinaEdge],
+    /// The object of each cell's nearest hit (−1 on a miss), numpy order.
+    pub object: Option<&'a [i32]>,
+    /// The scene the retina was traced from, for pictures drawn at their own resolution.
+    pub scene: Option<&'a dyn SceneProbe>,
+}
+
+impl std::fmt::Debug for RetinaExtras<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RetinaExtras")
+            .field("normal", &self.normal.map(|n| n.len()))
+            .field("camera", &self.camera)
+            .field("edges", &self.edges.len())
+            .field("object", &self.object.map(|o| o.len()))
+            .field("scene", &self.scene.is_some())
+            .finish()
+    }
 }
 
 /// Composites a retina (premultiplied `rgba`, optional `depth`, numpy-order `shape`) into a
@@ -341,6 +365,15 @@ fn check_extras(extras: &RetinaExtras<'_>, cells: usize, m: usize) -> NdResult<(
             return Err(NdError::Value {
                 arg: "camera".into(),
                 message: format!("cell size must be positive, got {}", cam.cell),
+            });
+        }
+    }
+    if let Some(obj) = extras.object {
+        if obj.len() != cells {
+            return Err(NdError::Shape {
+                arg: "object_id".into(),
+                expected: format!("{cells} cells"),
+                got: format!("{} ints", obj.len()),
             });
         }
     }

@@ -73,10 +73,32 @@ pub enum HiddenEdges {
     None,
 }
 
+/// Where a picture's detail comes from (N = 4; see [`composite`](super) and
+/// [`picture`](super::picture)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Detail {
+    /// At the picture's resolution: a retina that comes with the scene it was traced from
+    /// (`ndtrace.trace`) has its first-hit, volume and illustrative views and its sections
+    /// drawn from the scene's exact structure — the silhouettes, creases and occlusion
+    /// contours of its meshes and its surfaces, projected into the retina — and from 4D rays
+    /// cast where the picture asks (the default). Without a scene, as `Retina`.
+    #[default]
+    Scene,
+    /// From the retina's cells alone (trilinear samples of the grid): the maximum-intensity
+    /// and slice pictures, N ≠ 4, a retina without its scene (an array, a file), and the
+    /// viewer's drafts.
+    Retina,
+}
+
 /// Default camera distance, in half-diagonals of the retina cube.
 pub const DEFAULT_DISTANCE: f64 = 4.0;
 /// Largest number of pixels of a picture.
 pub const MAX_PIXELS: usize = 1 << 28;
+/// Most rays per pixel of the anti-aliasing ([`CompositeOptions::samples`]).
+pub const MAX_SAMPLES: usize = 256;
+/// Rays per pixel at edges when [`CompositeOptions::samples`] is 0.
+pub const DEFAULT_SAMPLES: usize = 16;
 /// Most frames of a turntable.
 pub const MAX_TURNTABLE_FRAMES: usize = 3600;
 
@@ -284,6 +306,16 @@ composite_options! {
         /// space instead of transparency", instead of the mode's rendering (see
         /// [`Cubes`](super::Cubes)). Default none.
         cubes: Option<super::Cubes> = None,
+        /// Anti-aliasing: rays per pixel where the picture has an edge — a silhouette, a
+        /// sheet's border, a step of colour or coverage between neighbouring pixels — in a
+        /// stratified √K × √K pattern (K rounded down to a square); one ray through the centre
+        /// elsewhere. 0 (the default) is automatic: 16. 1 turns anti-aliasing off. In
+        /// 0 ..= 256.
+        samples: usize = 0,
+        /// Where the picture's detail comes from: `"scene"` (the default: at the picture's
+        /// resolution, from the scene a traced retina comes with) or `"retina"` (the retina's
+        /// cells alone); see [`Detail`].
+        detail: Detail = Detail::Scene,
     }
 }
 
@@ -383,6 +415,18 @@ fn finite(key: &str, v: f64) -> Result<f64, OptionError> {
 }
 
 impl CompositeOptions {
+    /// The rays per pixel of the anti-aliasing at an edge: [`samples`](Self::samples) (0:
+    /// [`DEFAULT_SAMPLES`]) rounded down to a square k², and k.
+    pub fn edge_samples(&self) -> (usize, usize) {
+        let want = if self.samples == 0 {
+            DEFAULT_SAMPLES
+        } else {
+            self.samples
+        };
+        let k = (want as f64).sqrt().floor().max(1.0) as usize;
+        (k * k, k)
+    }
+
     /// These options with every key marked as given, so that serializing writes every field.
     pub fn with_every_key(self) -> Self {
         CompositeOptions {
@@ -406,6 +450,8 @@ impl CompositeOptions {
             opacity,
             step,
             rays_per_cell,
+            samples,
+            detail: _,
             depth_cue,
             axis: _,
             background,
@@ -520,6 +566,14 @@ impl CompositeOptions {
             return Err(bad(
                 "rays_per_cell",
                 format!("must be in 0 ..= 64 (0: a ray through every pixel), got {rays_per_cell}"),
+            ));
+        }
+        if *samples > MAX_SAMPLES {
+            return Err(bad(
+                "samples",
+                format!(
+                    "must be in 0 ..= {MAX_SAMPLES} rays per pixel (0: automatic), got {samples}"
+                ),
             ));
         }
         let cue = finite("depth_cue", *depth_cue)?;

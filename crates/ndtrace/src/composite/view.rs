@@ -6,9 +6,10 @@ use super::aids::{cut, world_of, Cutaway, ViewLayout};
 use super::illustrative::{self, Cues3};
 use super::montage::{render_tiles, Tiles};
 use super::overlay::{self, PixelEdge, RetinaEdge};
+use super::picture::Exact;
 use super::stages::{project_stage, stage_params, stage_point};
 use super::volume::{occupied_box, render_view, Camera3, Grid};
-use super::{prepare, CompositeMode, CompositeOptions, RetinaExtras, Volume};
+use super::{prepare, CompositeMode, CompositeOptions, Detail, RetinaExtras, Volume};
 use crate::camera::Projection;
 use glam::DVec3;
 
@@ -30,7 +31,10 @@ struct Edge3 {
 }
 
 /// A retina of m ≥ 3 axes made ready for 3D views.
-pub(super) struct View3 {
+pub(super) struct View3<'a> {
+    /// Drawn at the picture's resolution from the retina's scene ([`Detail::Scene`]), when it
+    /// comes with one; else (and for the modes that do not) from `source`.
+    exact: Option<Exact<'a>>,
     source: Source,
     /// Cells of the 3D volume (column, row, slice).
     n: [usize; 3],
@@ -43,15 +47,28 @@ pub(super) struct View3 {
     mode: CompositeMode,
 }
 
-impl View3 {
+impl<'a> View3<'a> {
     pub(super) fn new(
         rgba: &[f32],
-        depth: Option<&[f32]>,
+        depth: Option<&'a [f32]>,
         shape: &[usize],
-        extras: &RetinaExtras<'_>,
+        extras: &RetinaExtras<'a>,
         cells: usize,
         opts: &CompositeOptions,
     ) -> Self {
+        if let Some(probe) = extras.scene {
+            let exact_modes = matches!(
+                opts.mode,
+                CompositeMode::FirstHit | CompositeMode::Volume | CompositeMode::Illustrative
+            );
+            if shape.len() == 3
+                && opts.detail == Detail::Scene
+                && exact_modes
+                && opts.cubes.is_none()
+            {
+                return Self::exact(probe, rgba, depth, shape, extras, cells, opts);
+            }
+        }
         let ortho = opts.projection == Projection::Orthographic;
         let down_to_3d = |mut vol: Volume| {
             let mut stage = 0;
@@ -178,6 +195,7 @@ impl View3 {
             Vec::new()
         };
         View3 {
+            exact: None,
             source,
             n,
             frame,
@@ -188,6 +206,48 @@ impl View3 {
             } else {
                 opts.mode
             },
+        }
+    }
+
+    /// The views of a 3D retina drawn from its scene ([`Exact`]): the structure and the cells'
+    /// colours, framed by the structure's box (the same at any retina resolution).
+    fn exact(
+        probe: &'a dyn super::probe::SceneProbe,
+        rgba: &[f32],
+        depth: Option<&'a [f32]>,
+        shape: &[usize],
+        extras: &RetinaExtras<'a>,
+        cells: usize,
+        opts: &CompositeOptions,
+    ) -> Self {
+        let unit = CompositeOptions {
+            opacity: 1.0,
+            ..opts.clone()
+        };
+        let prepared = prepare(rgba, depth, cells, &unit);
+        let exact = Exact::new(probe, &prepared, shape, depth, extras.object, opts);
+        let n = [shape[2], shape[1], shape[0]];
+        let frame = if opts.fit { exact.frame() } else { None };
+        let illustrative = opts.mode == CompositeMode::Illustrative;
+        let edges = if illustrative && opts.edges {
+            edges_3d(extras.edges, shape, n, opts)
+        } else {
+            Vec::new()
+        };
+        // What a camera the structure cannot be projected for sees: the cells, opaque where
+        // the first-hit surface is.
+        let source = Source::Grid(Grid::new(&Volume {
+            shape: shape.to_vec(),
+            cells: prepared,
+        }));
+        View3 {
+            exact: Some(exact),
+            source,
+            n,
+            frame,
+            sections: None,
+            edges,
+            mode: opts.mode,
         }
     }
 
@@ -224,7 +284,6 @@ impl View3 {
                 let mut img = vec![0f32; w * h * 4];
                 let view = self.view(&sized(wl, ht, opts.azimuth));
                 paste(&mut img, w, &view, wl.max(1), 0, 0, wl, ht);
-                let vol = self.sections.as_ref().expect("sections volume");
                 for (k, (x0, y0, qw, qh)) in [(wl, 0, wr, ht), (0, ht, wl, hb), (wl, ht, wr, hb)]
                     .into_iter()
                     .enumerate()
@@ -232,7 +291,11 @@ impl View3 {
                     if qw == 0 || qh == 0 {
                         continue;
                     }
-                    let tile = section(vol, opts.section, k, qw, qh, bg);
+                    let tile = match (&self.exact, &self.sections) {
+                        (Some(ex), _) => ex.section(opts.section, k, qw, qh, opts),
+                        (None, Some(vol)) => section(vol, opts.section, k, qw, qh, bg),
+                        (None, None) => unreachable!("a sections layout keeps its volume"),
+                    };
                     paste(&mut img, w, &tile, qw, x0, y0, qw, qh);
                 }
                 img
@@ -249,6 +312,53 @@ impl View3 {
     fn view(&self, opts: &CompositeOptions) -> Vec<f32> {
         let bg = opts.background.map(|x| x as f32);
         let cam = Camera3::new(self.n, self.frame, opts);
+        if let Some(ex) = &self.exact {
+            if let Some((mut img, half, cover)) = ex.view(&cam, self.mode, opts) {
+                let mut pixels = project(&self.edges, &cam);
+                if self.mode == CompositeMode::Illustrative && opts.edges {
+                    let alpha: Vec<f32> = img.iter().skip(3).step_by(4).copied().collect();
+                    let outline: Vec<Edge3> = ex
+                        .silhouettes(&cam, &alpha)
+                        .into_iter()
+                        .map(|(a, b, depth)| Edge3 {
+                            a,
+                            b,
+                            depth,
+                            visible: true,
+                        })
+                        .collect();
+                    pixels.extend(project(&outline, &cam));
+                }
+                if !pixels.is_empty() {
+                    let under = img.clone();
+                    overlay::draw(&mut img, opts.size.0, &pixels, Some(&half), opts);
+                    // The lines end at the object's outline, where its coverage does: nothing
+                    // is drawn beyond it (a line on the silhouette shows its inner half).
+                    for (i, &c) in cover.iter().enumerate() {
+                        if c < 1.0 {
+                            for k in i * 4..i * 4 + 4 {
+                                img[k] = under[k] + (img[k] - under[k]) * c;
+                            }
+                        }
+                    }
+                }
+                return img;
+            }
+            // The structure cannot be projected for this camera: the cells' picture.
+            let mode = match self.mode {
+                CompositeMode::Illustrative => CompositeMode::Volume,
+                m => m,
+            };
+            let Source::Grid(grid) = &self.source else {
+                unreachable!("an exact view keeps its cells as a grid")
+            };
+            let (mut img, half) = render_view(grid, &cam, mode, opts, bg, !self.edges.is_empty());
+            if !self.edges.is_empty() {
+                let pixels = project(&self.edges, &cam);
+                overlay::draw(&mut img, opts.size.0, &pixels, half.as_deref(), opts);
+            }
+            return img;
+        }
         let classified;
         let grid = match &self.source {
             Source::Grid(g) => g,

@@ -355,6 +355,37 @@ impl Camera3 {
         ))
     }
 
+    /// The eye (perspective) or the centre of the view plane (orthographic), cell coordinates.
+    pub(super) fn eye(&self) -> DVec3 {
+        self.eye
+    }
+
+    /// The unit view direction (cell coordinates).
+    pub(super) fn forward(&self) -> DVec3 {
+        self.fwd
+    }
+
+    /// Whether the camera is orthographic.
+    pub(super) fn orthographic(&self) -> bool {
+        self.ortho
+    }
+
+    /// The picture's size (W, H) in pixels.
+    pub(super) fn size(&self) -> (usize, usize) {
+        (self.w, self.h)
+    }
+
+    /// The displacements (cell coordinates) of one picture pixel to the right and one down, at
+    /// the depth of `p`.
+    pub(super) fn pixel_steps(&self, p: DVec3) -> (DVec3, DVec3) {
+        let k = if self.ortho {
+            self.pixel
+        } else {
+            self.pixel * self.view_distance(p)
+        };
+        (self.right * k, self.up * -k)
+    }
+
     /// The unit direction of the view ray through `p` (cell coordinates).
     pub(super) fn view_direction(&self, p: DVec3) -> DVec3 {
         if self.ortho {
@@ -384,8 +415,16 @@ impl Camera3 {
     /// whether t must stay ≥ 0.
     #[inline]
     pub(super) fn ray(&self, px: usize, py: usize) -> (DVec3, DVec3, bool) {
-        let sx = (px as f64 + 0.5 - self.w as f64 / 2.0) * self.pixel;
-        let sy = (self.h as f64 / 2.0 - py as f64 - 0.5) * self.pixel;
+        self.ray_at(px as f64 + 0.5, py as f64 + 0.5)
+    }
+
+    /// The ray through the picture point (x, y) (pixels, x right and y down; pixel (i, j)
+    /// spans [i, i + 1] × [j, j + 1]): origin, unit direction (cell units) and whether t must
+    /// stay ≥ 0.
+    #[inline]
+    pub(super) fn ray_at(&self, x: f64, y: f64) -> (DVec3, DVec3, bool) {
+        let sx = (x - self.w as f64 / 2.0) * self.pixel;
+        let sy = (self.h as f64 / 2.0 - y) * self.pixel;
         if self.ortho {
             (self.eye + self.right * sx + self.up * sy, self.fwd, false)
         } else {

@@ -38,13 +38,30 @@ impl<const N: usize> EdgeCache<N> {
         if let Some(e) = self.edges.lock().map_err(|_| poisoned())?.get(&key) {
             return Ok(Arc::clone(e));
         }
+        let ridges = self.ridges(object, vertices, simplices)?;
+        let edges = Arc::new(ridges.feature_edges(vertices, angle_degrees)?);
+        self.edges
+            .lock()
+            .map_err(|_| poisoned())?
+            .insert(key, Arc::clone(&edges));
+        Ok(edges)
+    }
+
+    /// The [`Ridges`] of object `object`, the mesh `(vertices, simplices)`: cached when they
+    /// [fit](Ridges::fits) the mesh, else found and cached.
+    pub(crate) fn ridges(
+        &self,
+        object: usize,
+        vertices: &[Vector<N>],
+        simplices: &[[u32; N]],
+    ) -> NdResult<Arc<Ridges<N>>> {
         let known = self
             .ridges
             .lock()
             .map_err(|_| poisoned())?
             .get(&object)
             .cloned();
-        let ridges = match known {
+        Ok(match known {
             Some(r) if r.fits(vertices, simplices) => r,
             _ => {
                 let r = Arc::new(Ridges::new(vertices, simplices)?);
@@ -54,13 +71,7 @@ impl<const N: usize> EdgeCache<N> {
                     .insert(object, Arc::clone(&r));
                 r
             }
-        };
-        let edges = Arc::new(ridges.feature_edges(vertices, angle_degrees)?);
-        self.edges
-            .lock()
-            .map_err(|_| poisoned())?
-            .insert(key, Arc::clone(&edges));
-        Ok(edges)
+        })
     }
 
     /// The cache of a scene whose objects are this scene's, moved ([`crate::scene::Scene`]'s

@@ -202,13 +202,21 @@ impl<const N: usize> Ridges<N> {
         Ok(out)
     }
 
-    fn ridge_count(&self) -> usize {
+    /// The number of ridges.
+    pub fn ridge_count(&self) -> usize {
         self.starts.len() - 1
     }
 
-    /// The incidences of ridge `r`.
-    fn group(&self, r: usize) -> &[u32] {
+    /// The incidences of ridge `r`: `simplex·N + corner left out` for each simplex that has
+    /// it (the ridge is that simplex's other N − 1 vertices).
+    pub fn group(&self, r: usize) -> &[u32] {
         &self.incidences[self.starts[r] as usize..self.starts[r + 1] as usize]
+    }
+
+    /// Simplex `s` with its vertices welded (of vertices with the same coordinates, the
+    /// smallest id stands for all).
+    pub fn welded(&self, s: usize) -> &[u32; N] {
+        &self.simplices[s]
     }
 
     /// The sorted vertex ids of ridge `r`.

@@ -18,6 +18,9 @@
 //! - [`clip`]: clip hyperplanes, checked only in scenes that have them: a ray's nearest hit
 //!   beyond one of its object's hyperplanes is rejected and the ray traced again without it;
 //! - [`pool`]: the retina's output buffers, reused between traces;
+//! - [`probe`]: the scene as a picture drawn at its own resolution asks it
+//!   ([`crate::composite::SceneProbe`]): its structure in the retina and the 4D rays through
+//!   retina points, shaded as here;
 //! - `splat.rs` and `surface.rs`: after the trace, the surfaces drawn directly
 //!   ([`crate::surface`]) projected into the retina as thin sheets, occluded by depth and
 //!   blended by opacity, each point lit by the limit of its thickening's lighting.
@@ -30,6 +33,7 @@ pub mod clip;
 mod gouraud;
 mod packets;
 pub mod pool;
+pub mod probe;
 mod sampling;
 pub mod shade;
 mod splat;

@@ -421,9 +421,16 @@ pub struct ObjectDesc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub triangles: Option<Rows<i64>>,
     /// Surface: the width of its sheet in the retina, in retina cells (default
-    /// [`crate::surface::DEFAULT_WIDTH`]).
+    /// [`crate::surface::DEFAULT_WIDTH`]): what the retina (its files, and pictures drawn from
+    /// its cells alone) holds. Pictures drawn from the scene use `line_width`; a `width` given
+    /// is accepted with a warning saying so.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub width: Option<f64>,
+    /// Surface: its least apparent thickness in a picture drawn from the scene, in picture
+    /// pixels (default [`crate::surface::DEFAULT_LINE_WIDTH`]): a surface seen edge-on is a
+    /// line this wide.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub line_width: Option<f64>,
     /// Mesh: a `.npz` file holding `vertices` and `simplices`, relative to the scene file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub file: Option<String>,

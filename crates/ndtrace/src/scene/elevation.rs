@@ -23,12 +23,13 @@ pub(crate) struct ElevationObject<const N: usize> {
 }
 
 /// The keys an elevation object does not use.
-fn unused(o: &ObjectDesc) -> [(&'static str, bool); 6] {
+fn unused(o: &ObjectDesc) -> [(&'static str, bool); 7] {
     [
         ("vertices", o.vertices.is_some()),
         ("simplices", o.simplices.is_some()),
         ("triangles", o.triangles.is_some()),
         ("width", o.width.is_some()),
+        ("line_width", o.line_width.is_some()),
         ("file", o.file.is_some()),
         ("subdivisions", o.subdivisions.is_some()),
     ]

@@ -92,6 +92,13 @@ pub(super) fn world_object<const N: usize>(
         ShapeKind::Surface => {
             reject_elevation_keys(o, path)?;
             let (m, t, w) = surface_mesh::<N>(o, path)?;
+            if o.width.is_some() {
+                warnings.push(format!(
+                    "{path}.width: sets the surface's sheet in the retina (retina cells), which \
+                     only pictures drawn from the retina's cells show; pictures drawn from the \
+                     scene draw the surface itself, at least `line_width` picture pixels thick"
+                ));
+            }
             (m, Some((t, w)))
         }
         ShapeKind::Elevation => {
@@ -185,7 +192,7 @@ pub(super) fn world_object<const N: usize>(
     if det(&a) < 0.0 {
         mesh.simplices.iter_mut().for_each(|s| s.swap(0, 1));
     }
-    let surface = triangles.map(|(t, width)| {
+    let surface = triangles.map(|(t, (width, line_width))| {
         // Triangles without area have no tangent plane: left out.
         let kept: Vec<[u32; 3]> = t
             .into_iter()
@@ -200,6 +207,7 @@ pub(super) fn world_object<const N: usize>(
         crate::surface::Surface {
             triangles: kept,
             width,
+            line_width,
             vertex_tangents,
         }
     });
@@ -300,6 +308,7 @@ fn object_mesh<const N: usize>(
     }
     extra("triangles", o.triangles.is_some())?;
     extra("width", o.width.is_some())?;
+    extra("line_width", o.line_width.is_some())?;
     opaque(o, path)?;
     Ok(match o.shape {
         ShapeKind::Surface | ShapeKind::Elevation => {
@@ -386,9 +395,13 @@ fn vertex_rows<'a, const N: usize>(v: &'a Rows<f64>, path: &str) -> R<Cow<'a, [f
     })
 }
 
+/// A surface's mesh, triangles and widths (the sheet's in the retina, the line's in pictures).
+type SurfaceParts<const N: usize> = (Mesh<N>, Vec<[u32; 3]>, (f64, f64));
+
 /// A `surface` object (dim = 4): its vertices as a mesh without simplices, its triangles (those
-/// without area dropped, counted in the second value) and its sheet width.
-fn surface_mesh<const N: usize>(o: &ObjectDesc, path: &str) -> R<(Mesh<N>, Vec<[u32; 3]>, f64)> {
+/// without area dropped, counted in the second value), its sheet width in the retina and its
+/// least line width in pictures.
+fn surface_mesh<const N: usize>(o: &ObjectDesc, path: &str) -> R<SurfaceParts<N>> {
     if N != 4 {
         return Err(PathError::new(
             format!("{path}.shape"),
@@ -420,6 +433,16 @@ fn surface_mesh<const N: usize>(o: &ObjectDesc, path: &str) -> R<(Mesh<N>, Vec<[
             format!(
                 "must be a number of retina cells in (0, {}], got {width}",
                 crate::surface::MAX_WIDTH
+            ),
+        ));
+    }
+    let line_width = o.line_width.unwrap_or(crate::surface::DEFAULT_LINE_WIDTH);
+    if !(line_width > 0.0 && line_width <= crate::surface::MAX_LINE_WIDTH) {
+        return Err(PathError::new(
+            format!("{path}.line_width"),
+            format!(
+                "must be a number of picture pixels in (0, {}], got {line_width}",
+                crate::surface::MAX_LINE_WIDTH
             ),
         ));
     }
@@ -460,7 +483,7 @@ fn surface_mesh<const N: usize>(o: &ObjectDesc, path: &str) -> R<(Mesh<N>, Vec<[
         }
         triangles.push(idx);
     }
-    Ok((mesh, triangles, width))
+    Ok((mesh, triangles, (width, line_width)))
 }
 
 fn shape_name(k: ShapeKind) -> &'static str {

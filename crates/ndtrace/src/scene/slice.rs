@@ -90,6 +90,7 @@ pub fn slice_desc<const N: usize>(
             simplices: Some(Rows::Array(Table::new(m, simplices).expect("whole rows"))),
             triangles: None,
             width: None,
+            line_width: None,
             file: None,
             subdivisions: None,
             field: None,

@@ -24,6 +24,11 @@ use crate::linalg::{dot, norm, scale, sub, Matrix, Vector};
 
 /// Default width of a surface's sheet in the retina, in cells.
 pub const DEFAULT_WIDTH: f64 = 2.0;
+/// Default least apparent thickness of a surface in a picture drawn at its own resolution,
+/// picture pixels (a surface seen edge-on is a line this wide).
+pub const DEFAULT_LINE_WIDTH: f64 = 1.5;
+/// Largest least apparent thickness accepted, picture pixels.
+pub const MAX_LINE_WIDTH: f64 = 64.0;
 /// Largest sheet width accepted, in cells.
 pub const MAX_WIDTH: f64 = 64.0;
 /// Most layers of one cell blended (nearest first) where a surface overlaps itself.
@@ -37,6 +42,8 @@ pub struct Surface<const N: usize> {
     pub triangles: Vec<[u32; 3]>,
     /// Width of the sheet in the retina, in cells.
     pub width: f64,
+    /// Least apparent thickness in a picture drawn at its own resolution, picture pixels.
+    pub line_width: f64,
     /// Per-vertex tangent projectors (a smooth material): the area-weighted mean of the
     /// neighbouring triangles' projectors, interpolated barycentrically at a point.
     pub vertex_tangents: Option<Vec<Matrix<N>>>,

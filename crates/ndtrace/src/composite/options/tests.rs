@@ -28,6 +28,8 @@ layout = "stereo"
 section = [0.5, -0.25, 0.0]
 stereo_angle = 4.0
 turntable = 12
+samples = 9
+detail = "retina"
 
 [cutaway]
 shape = "sphere"
@@ -73,18 +75,28 @@ fn every_key_sets_its_own_field_and_is_written_back() {
             radius: 0.5,
         }),
         cubes: Some(crate::composite::Cubes { size: 0.5 }),
+        samples: 9,
+        detail: Detail::Retina,
         given: GivenKeys::ALL,
     };
     assert_eq!(o, expect);
     assert_eq!(toml::to_string(&o).unwrap(), EVERY_KEY);
-    // One line per key, the table-valued `cutaway` and `cubes` last as their own sections.
+    // One line per key in the fields' order, the table-valued `cutaway` and `cubes` last as
+    // their own sections.
     let mut keys: Vec<&str> = EVERY_KEY
         .lines()
         .take_while(|l| !l.is_empty())
         .map(|l| &l[..l.find(' ').unwrap()])
         .collect();
     keys.extend(["cutaway", "cubes"]);
-    assert_eq!(keys, CompositeOptions::KEYS);
+    let tables = ["cutaway", "cubes"];
+    let mut fields: Vec<&str> = CompositeOptions::KEYS
+        .iter()
+        .copied()
+        .filter(|k| !tables.contains(k))
+        .collect();
+    fields.extend(tables);
+    assert_eq!(keys, fields);
     assert!(CompositeOptions::KEYS.iter().all(|k| o.given.has(k)));
 }
 
