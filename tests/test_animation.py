@@ -137,7 +137,7 @@ def test_video_choices(tmp_path):
 def test_mp4_without_imageio_ffmpeg_is_a_clear_error(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "imageio_ffmpeg", None)
     scene = scene4({"frames": 2, "sweep": {"plane": [0, 3], "degrees": [0, 30]}}, res=6)
-    with pytest.raises(ValueError, match="MP4 output needs imageio-ffmpeg"):
+    with pytest.raises(ValueError, match=r'MP4 output needs imageio-ffmpeg: pip install "ndtrace\[video\]"'):
         ndtrace.animate(scene, tmp_path / "c.mp4")
     assert os.listdir(tmp_path) == []
 

@@ -50,7 +50,10 @@ def test_the_bear_hair_shading_is_the_thickened_surfaces_average(material):
     """Each bear-hair cell is lit by the mean of the tube's lighting across its width; so its
     cells' mean colour is the thickened surface's (supersampled, a few cells thick)."""
     hair, tube = both(5.0, material, samples=8)
-    mean = lambda r: (r.rgba[..., :3].sum(axis=(0, 1, 2)) / r.rgba[..., 3].sum())
+
+    def mean(r):
+        return r.rgba[..., :3].sum(axis=(0, 1, 2)) / r.rgba[..., 3].sum()
+
     got, want = mean(hair), mean(tube)
     assert np.allclose(got, want, rtol=0.03), (got, want)  # within 1.3 % measured
 

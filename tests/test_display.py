@@ -103,6 +103,25 @@ def test_show_composite_keywords_need_a_retina():
         ndtrace.show(np.zeros((2, 2, 4), np.float32), mode="mip")
 
 
+def test_widget_works_on_every_call(tesseract):
+    """``ndtrace.viewer.widget`` and ``ndtrace.widget`` make a widget each time they are called
+    (the first call used to replace the function by its submodule of the same name: the second
+    raised TypeError: 'module' object is not callable)."""
+    pytest.importorskip("anywidget")
+    import ndtrace.viewer.widget  # noqa: F401 - the submodule, as a script may import it
+
+    widgets = []
+    try:
+        for _ in range(2):
+            widgets.append(ndtrace.viewer.widget(tesseract, size=(8, 8)))
+            widgets.append(ndtrace.widget(tesseract, size=(8, 8)))
+        assert len(widgets) == 4 and all(w.session.scene is tesseract for w in widgets)
+        assert ndtrace.viewer.widget is ndtrace.widget
+    finally:
+        for w in widgets:
+            w.close()
+
+
 def test_widget_runs_the_viewer_over_custom_messages(tesseract):
     """The widget answers the page's messages as the server does and sends frames as buffers."""
     pytest.importorskip("anywidget")

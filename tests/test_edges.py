@@ -109,7 +109,7 @@ def test_regular_polytopes_from_qhull_give_their_true_edges(name, points, edges)
     pts = points()
     n = pts.shape[1]
     rng = np.random.default_rng(len(name))
-    for trial in range(2):
+    for _trial in range(2):
         rot = special_ortho_group.rvs(n, random_state=rng)
         hull = ConvexHull(pts @ rot.T)  # Qhull: triangulated facets, orientation not consistent
         angle = 10.0 if name == "600-cell" else 20.0

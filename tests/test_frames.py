@@ -16,8 +16,7 @@ import numpy as np
 import pytest
 
 import ndtrace
-from ndtrace import frames as fr
-from ndtrace import rotation as rot
+from ndtrace import frames as fr, rotation as rot
 from ndtrace.rotation import quat_multiply, quat_to_matrix
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -12,8 +12,8 @@ with its reason in the commit message.
 
 from __future__ import annotations
 
-import os
 import glob
+import os
 
 import numpy as np
 import pytest

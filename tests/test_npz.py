@@ -6,7 +6,6 @@ a ValueError naming the scene line, the field, the file and the array."""
 from __future__ import annotations
 
 import itertools
-import re
 import zipfile
 
 import numpy as np

@@ -174,7 +174,7 @@ def test_rotation_between_is_the_minimal_rotation(n):
     np.testing.assert_allclose(m @ e, -e, atol=1e-14)
     with pytest.raises(ValueError, match=r"^b: not a unit vector .* at batch index 1$"):
         rot.rotation_between(a[:2], np.stack([b[0], 2 * b[1]]))
-    with pytest.raises(ValueError, match=r"^b: expected shape \(\.\.\., %d\) to match a" % n):
+    with pytest.raises(ValueError, match=rf"^b: expected shape \(\.\.\., {n}\) to match a"):
         rot.rotation_between(a[0], np.ones(n + 1))
 
 

@@ -715,7 +715,7 @@ def test_backface_culling(n):
         same_retina(a, b)
 
     for name, (vertices, simplices) in (("hypercube", kuhn_hypercube(n)), ("cross_polytope", cross_polytope_mesh(n))):
-        mesh = lambda s, **k: ("mesh", dict(vertices=vertices, simplices=s, **k))  # noqa: E731
+        mesh = lambda s, vertices=vertices, **k: ("mesh", dict(vertices=vertices, simplices=s, **k))  # noqa: E731
         outward, inward = mesh(simplices), mesh(flipped(simplices))
         # A reflection (negative determinant) keeps the orientation: the builder reorders.
         reflected = mesh(simplices, transform=[{"scale": [-1.0] + [1.0] * (n - 1)}])

@@ -16,20 +16,34 @@ table drives ``ndtrace.animate``, the CLI's ``--frames`` and scripts::
 from __future__ import annotations
 
 import os
-import tempfile
-from typing import Callable
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
-from .composite import composite as _composite, scene_options
+from . import _ndtrace
+from ._dask import render_frames
+from ._description import plain_scene, scene_reader
+from ._optional import need
+from ._util import output_done, output_temp
+from .composite import scene_options
 from .files import to_srgb8, write_png
 from .retina import trace
-from .scene import Scene, _reanimated, load_dict
+from .scene import Scene, load_dict
+from .slicing import picture as slice_picture, slice_options, sliced
 
 __all__ = ["animate", "frame_scene", "frame_paths", "gif_frame_ms", "render_frame",
            "GIF_MEMORY_LIMIT"]
 
 VIDEOS = ("gif", "mp4", None)
+
+
+def _reanimated(scene: Scene, data: dict) -> Scene:
+    """``data`` — ``scene``'s description with another ``[animation]`` table — as a scene that
+    shares ``scene``'s build when nothing else differs (else built anew, as :func:`load_dict`)."""
+    compiled = _ndtrace.load_dict(plain_scene(data, "<dict>"), "<dict>", scene._base, scene_reader,
+                                  scene.compiled())
+    return Scene._from_compiled(compiled, scene._base)
 
 
 def _table(scene: Scene, animation: dict | None, frames: int | None) -> Scene:
@@ -73,7 +87,12 @@ def render_frame(animated: Scene, k: int, threads: int | None, options: dict,
     """Frame ``k`` of ``animated``'s animation traced and composited with ``options``: the
     picture ``animate`` writes (here or on a Dask worker)."""
     still = frame_scene(animated, k)
-    return _composite(trace(still, threads=threads, progress=progress), threads=threads, **options)
+    if (cut := sliced(still, options.get("size"))) is not still:
+        # A [slice] (or a slice sweep): the frame is the (N−1)-D slice.
+        options = slice_options(options, cut.dim)
+        still = cut
+    return slice_picture(still, trace(still, threads=threads, progress=progress), options,
+                         threads=threads)
 
 
 def frame_paths(output: str | os.PathLike, frames: int) -> list[str]:
@@ -93,12 +112,9 @@ def _video_kind(output: str, video: str | None) -> str | None:
     kind = ext[1:] if ext != ".png" else video
     if kind == "mp4":
         try:
-            import imageio_ffmpeg  # noqa: F401
-        except ImportError:
-            raise ValueError(
-                "MP4 output needs imageio-ffmpeg (pip install imageio-ffmpeg); "
-                "write a .gif or numbered .png frames instead"
-            ) from None
+            need("imageio_ffmpeg", extra="video", what="MP4 output", package="imageio-ffmpeg")
+        except ImportError as e:
+            raise ValueError(f"{e}; write a .gif or numbered .png frames instead") from None
     folder = os.path.dirname(os.path.abspath(output))
     if not os.path.isdir(folder):
         raise ValueError(f"output {output}: folder {folder} does not exist")
@@ -122,11 +138,9 @@ class _Video:
 
     def __init__(self, kind: str, path: str, fps: float) -> None:
         self.kind, self.path, self.fps = kind, path, fps
-        folder = os.path.dirname(os.path.abspath(path))
-        fd, self.tmp = tempfile.mkstemp(prefix=".ndtrace-", suffix="." + kind, dir=folder)
-        os.close(fd)
+        self.tmp = output_temp(path, "." + kind)
         self.frames: list = []  # GIF: palette images
-        self.writer = None  # MP4: imageio-ffmpeg's generator
+        self.writer: Any = None  # MP4: imageio-ffmpeg's generator
         self.size: tuple[int, int] | None = None
 
     def add(self, rgb: np.ndarray) -> None:
@@ -156,7 +170,7 @@ class _Video:
                        duration=gif_frame_ms(self.fps), loop=0)
         else:
             self.writer.close()
-        os.replace(self.tmp, self.path)
+        output_done(self.tmp, self.path)
 
     def abort(self) -> None:
         if self.writer is not None:
@@ -263,9 +277,8 @@ def animate(
 
     try:
         if client is not None:
-            from .cluster import render_frames
-
-            render_frames(animated, count, client, threads, options, cells, progress, write)
+            render_frames(animated, count, client, threads, options, cells, progress, write,
+                          render_frame)
         else:
             for k in range(count):
                 tick = None if progress is None else (lambda done, _total, k=k: progress(k * cells + done, count * cells))

@@ -17,40 +17,44 @@ and exits with status 130.
 from __future__ import annotations
 
 import argparse
-import copy
+import math
 import os
-import runpy
 import signal
 import sys
 import time
-import tomllib
 import traceback
 
-import numpy as np
-
-from . import __version__, _ndtrace
+from . import _ndtrace
+from ._command import (
+    THREADS_PER_CORE as THREADS_PER_CORE,
+    ScriptError as ScriptError,
+    UsageError,
+    apply_sets,
+    capped_threads,
+    ints,
+    load_scene,
+    max_threads as max_threads,
+)
+from ._description import plain
+from ._ndtrace import __version__
+from ._optional import install
+from .animation import animate, write_frames
+from .cluster import check_address, connect, distributed_module
+from .composite import scene_options
 from .files import IMAGE_FORMATS, write_exr, write_image
 from .retina import trace
-from .scene import Scene, load_dict, load_file
+from .scene import Scene, load_dict
+from .slicing import picture as slice_picture, slice_options, sliced
+from .svg import write_svg
+from .viewer.cli import main as view
 
 MODES: tuple[str, ...] = tuple(_ndtrace.RENDER_MODES)  # render.mode, as the core names them
 COMPOSITES: tuple[str, ...] = tuple(_ndtrace.COMPOSITE_MODES)  # composite.mode
-LAYOUTS = ("single", "sections", "stereo")  # composite.layout
+LAYOUTS = ("single", "sections", "stereo", "slice")  # composite.layout
+#: Axis names of --slice AXIS=OFFSET (also x0 … x7).
+AXES = ("x", "y", "z", "w")
 #: Frames per second of a turntable video.
 TURNTABLE_FPS = 12.0
-
-
-class UsageError(Exception):
-    """A problem with the command line or the scene: one line, exit status 2."""
-
-
-#: ``--threads`` is capped at this many threads per core: more only costs memory and start-up.
-THREADS_PER_CORE = 4
-
-
-def max_threads() -> int:
-    """The most worker threads ``--threads`` may ask for."""
-    return THREADS_PER_CORE * (os.cpu_count() or 1)
 
 
 def _terminate(signum, _frame):
@@ -128,6 +132,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--turntable", type=int, metavar="F",
                    help="with -o .gif/.mp4 (or .png: numbered frames): F frames of the compositing "
                    "camera orbiting one traced retina")
+    p.add_argument("--slice", metavar="AXIS=OFFSET|NORMAL:OFFSET",
+                   help="render the (N−1)-D slice by a hyperplane: w=0.3 (an axis: x, y, z, w or "
+                        "x0 … x7) or 1,0,0,1:0.5 (normal and offset); sets [slice]")
     p.add_argument("--frames", type=int, metavar="K",
                    help="render K frames of the scene's [animation] (implied by -o .gif/.mp4)")
     p.add_argument("--video", choices=("gif", "mp4", "none"), default="gif",
@@ -136,7 +143,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--dask", nargs="?", const="local", type=_dask_address, metavar="ADDRESS",
                    help="trace (or render an animation's frames) on Dask: 'local' (the default: "
                         "a LocalCluster on this machine) or a scheduler tcp://HOST:PORT "
-                        "(pip install 'ndtrace[dask]')")
+                        f"({install('dask')})")
     p.add_argument("--quiet", action="store_true", help="no progress output")
     p.add_argument("--debug", action="store_true", help="show tracebacks")
     p.add_argument("--version", action="version", version=f"ndtrace {__version__}")
@@ -144,8 +151,6 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _dask_address(text: str) -> str:
-    from .cluster import check_address
-
     try:
         return check_address(text)
     except ValueError as e:
@@ -165,67 +170,9 @@ def _add_output_options(p: argparse.ArgumentParser) -> None:
                    help="with -o .gif/.mp4: also write the numbered PNG frames")
 
 
-def _set_path(text: str) -> tuple[list, object]:
-    """``KEY.PATH=VALUE`` → (path steps, value parsed as TOML, or the bare text)."""
-    key, sep, value = text.partition("=")
-    steps = key.strip().split(".")
-    if not sep or not all(steps):
-        raise UsageError(f"--set {text}: expected KEY.PATH=VALUE, e.g. camera.fov=40")
-    try:
-        parsed = tomllib.loads(f"v = {value.strip()}")["v"]
-    except tomllib.TOMLDecodeError:
-        parsed = value.strip()
-    return [int(k) if k.isdigit() else k for k in steps], parsed
-
-
-def _set(data: dict, text: str) -> None:
-    """Applies one ``--set`` to a scene description (missing tables are created)."""
-    steps, value = _set_path(text)
-    node = data
-    for i, step in enumerate(steps):
-        where = ".".join(map(str, steps[:i])) or "the scene"
-        last = i == len(steps) - 1
-        if isinstance(node, list):
-            if not isinstance(step, int):
-                raise UsageError(f"--set {text}: {where} is a list: expected an index, got {step!r}")
-            if step >= len(node):
-                raise UsageError(f"--set {text}: {where} has {len(node)} entries, no {step}")
-        elif isinstance(node, dict):
-            step = str(step)
-            if not last and not isinstance(node.get(step), (dict, list)):
-                node[step] = {}
-        else:
-            raise UsageError(f"--set {text}: {where} is a value, not a table or list")
-        if last:
-            node[step] = value
-        else:
-            node = node[step]
-
-
-def _apply_sets(scene: Scene, sets: list[str], base: str) -> Scene:
-    """The scene with every ``--set`` applied, validated; an error names the first override
-    that makes the scene invalid."""
-    if not sets:
-        return scene
-    original = scene.to_dict()
-    data = copy.deepcopy(original)
-    for text in sets:
-        _set(data, text)
-    try:
-        return load_dict(data, base=base, name="--set " + " --set ".join(sets))
-    except ValueError:
-        data = copy.deepcopy(original)
-        for text in sets:
-            _set(data, text)
-            load_dict(data, base=base, name=f"--set {text}")  # raises for the culprit
-        raise
-
-
 def _picture_options(scene: Scene, transparent: bool) -> dict:
     """The composite options of a still: the scene's, without its background when transparent
     (then the picture is premultiplied RGBA over black, as transparent files store it)."""
-    from .composite import scene_options
-
     options = scene_options(scene.to_dict())
     if transparent:
         options["background"] = None
@@ -237,16 +184,6 @@ def _write_picture(path: str, picture, transparent: bool) -> None:
         write_exr(path, picture)
     else:
         write_image(path, picture, transparent=transparent)
-
-
-def _ints(text: str, option: str, sep: str = ",", positive: bool = True) -> list[int]:
-    try:
-        values = [int(v) for v in text.split(sep)]
-    except ValueError:
-        raise UsageError(f"{option}: expected integers separated by '{sep}', got {text!r}") from None
-    if positive and any(v <= 0 for v in values):
-        raise UsageError(f"{option}: values must be positive, got {text!r}")
-    return values
 
 
 def _floats(text: str, option: str, count: int | tuple[int, ...]) -> list[float]:
@@ -288,7 +225,7 @@ def _composite_flags(args: argparse.Namespace) -> dict:
             raise UsageError(f"--view: expected AZIMUTH,ELEVATION in degrees, got {args.view!r}") from None
         flags.append(("--view", {"azimuth": az, "elevation": el}))
     if args.size:
-        size = _ints(args.size.lower(), "--size", "x", positive=False)
+        size = ints(args.size.lower(), "--size", "x", positive=False)
         if len(size) != 2:
             raise UsageError(f"--size: expected WxH, got {args.size!r}")
         flags.append(("--size", {"size": size}))
@@ -309,52 +246,47 @@ def _composite_flags(args: argparse.Namespace) -> dict:
     return keys
 
 
-def _load(path: str) -> Scene:
-    if not os.path.exists(path):
-        raise UsageError(f"{path}: no such file")
-    if path.endswith(".toml"):
-        return load_file(path)
-    if path.endswith(".py"):
-        namespace = _run_script(path, lambda: runpy.run_path(path), "running the script")
-        make = namespace.get("scene")
-        if not callable(make):
-            raise UsageError(f"{path}: a scene script must define scene() returning an ndtrace.Scene")
-        scene = _run_script(path, make, "scene()")
-        if not isinstance(scene, Scene):
-            raise UsageError(f"{path}: scene() returned {type(scene).__name__}, not an ndtrace.Scene")
-        scene.compiled()  # validate now
-        return scene
-    raise UsageError(f"{path}: unknown scene type: expected a .toml or .py file")
+def slice_flag(text: str, dim: int) -> dict:
+    """The ``[slice]`` table of ``--slice``: ``AXIS=OFFSET`` (x, y, z, w or x0 … x7) or
+    ``NORMAL:OFFSET`` (N comma-separated numbers, then the offset)."""
+    def number(word: str) -> float:
+        try:
+            x = float(word)
+        except ValueError:
+            raise UsageError(f"--slice {text}: {word!r} is not a number") from None
+        if not math.isfinite(x):
+            raise UsageError(f"--slice {text}: {word!r} is not finite")
+        return x
 
-
-class ScriptError(UsageError):
-    """A ``.py`` scene that does not run: one line naming the script, the line and the error."""
-
-
-def _run_script(path: str, call, what: str):
-    """``call()``, with an exception of the user's script turned into one line naming the
-    script (and its line): a syntax error, an exception or infinite recursion, or
-    ``sys.exit`` (a script that exits has produced no scene)."""
-    try:
-        return call()
-    except SyntaxError as e:
-        where = f"{e.filename or path}:{e.lineno}" + (f":{e.offset}" if e.offset else "")
-        raise ScriptError(f"{where}: syntax error: {e.msg}") from e
-    except SystemExit as e:
-        raise ScriptError(f"{path}: {what} called sys.exit({e.code!r}) instead of returning a "
-                          "scene") from e
-    except UsageError:
-        raise
-    except Exception as e:
-        frames = [f for f in traceback.extract_tb(e.__traceback__)
-                  if os.path.abspath(f.filename) == os.path.abspath(path)]
-        where = f"{path}:{frames[-1].lineno}" if frames else path
-        raise ScriptError(f"{where}: {what} raised {type(e).__name__}: {e}") from e
+    if "=" in text:
+        axis, _, value = text.partition("=")
+        axis = axis.strip().lower()
+        names = {name: k for k, name in enumerate(AXES)} | {f"x{k}": k for k in range(8)}
+        if axis not in names or names[axis] >= dim:
+            valid = ", ".join(list(AXES[:dim]) + [f"x0 … x{dim - 1}"])
+            raise UsageError(f"--slice {text}: unknown axis {axis!r} for dim = {dim} "
+                             f"(expected {valid})")
+        normal = [0.0] * dim
+        normal[names[axis]] = 1.0
+        return {"normal": normal, "offset": number(value)}
+    if ":" in text:
+        vector, _, value = text.rpartition(":")
+        normal = [number(w) for w in vector.split(",")]
+        if len(normal) != dim:
+            raise UsageError(f"--slice {text}: expected {dim} numbers before ':' (dim = {dim}), "
+                             f"got {len(normal)}")
+        if not any(normal):
+            raise UsageError(f"--slice {text}: the normal must not be zero")
+        return {"normal": normal, "offset": number(value)}
+    raise UsageError(f"--slice {text}: expected AXIS=OFFSET (e.g. w=0.3) or NORMAL:OFFSET "
+                     "(e.g. 1,0,0,1:0.5)")
 
 
 def _check_output(path: str, exts: tuple[str, ...], option: str) -> None:
     if not path.lower().endswith(exts):
         raise UsageError(f"{option} {path}: unknown extension: expected {' or '.join(exts)}")
+    if os.path.isdir(path):
+        raise UsageError(f"{option} {path}: is a folder, not a file to write")
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise UsageError(f"{option} {path}: folder {folder} does not exist")
@@ -390,23 +322,17 @@ def run(argv: list[str] | None = None) -> int:
     if os.path.realpath(args.scene) in (os.path.realpath(args.output),
                                          os.path.realpath(args.retina or args.output)):
         raise UsageError(f"{args.scene}: an output would overwrite the scene file")
-    if args.threads is not None and args.threads < 1:
-        raise UsageError(f"--threads: must be at least 1, got {args.threads}")
-    if args.threads is not None and args.threads > max_threads():
-        if not args.quiet:
-            print(f"ndtrace: --threads {args.threads} capped at {max_threads()} "
-                  f"({THREADS_PER_CORE} per core on {os.cpu_count() or 1} cores)", file=sys.stderr)
-        args.threads = max_threads()
+    args.threads = capped_threads(args.threads, "ndtrace", args.quiet)
     for name in ("samples", "seed", "frames"):
         value = getattr(args, name)
         if value is not None and not 0 <= value < 2**32:
             raise UsageError(f"--{name}: must be in 0..{2**32 - 1}, got {value}")
-    scene = _load(args.scene)
-    scene = _apply_sets(scene, args.set, scene._base or os.path.dirname(os.path.abspath(args.scene)))
+    scene = load_scene(args.scene)
+    scene = apply_sets(scene, args.set, scene._base or os.path.dirname(os.path.abspath(args.scene)))
     data = scene.to_dict()
     render = data.setdefault("render", {})
     if args.resolution:
-        res = _ints(args.resolution, "--resolution")
+        res = ints(args.resolution, "--resolution")
         data["camera"]["resolution"] = res[0] if len(res) == 1 else res
     if args.samples is not None:
         render["samples"] = args.samples
@@ -414,6 +340,8 @@ def run(argv: list[str] | None = None) -> int:
         render["seed"] = args.seed
     if args.mode:
         render["mode"] = args.mode
+    if args.slice is not None:
+        data["slice"] = slice_flag(args.slice, int(data["dim"]))
     comp = {**(data.get("composite") or {}), **_composite_flags(args)}
     if comp:
         data["composite"] = comp
@@ -427,10 +355,15 @@ def run(argv: list[str] | None = None) -> int:
 
     if animating and scene.to_dict().get("animation") is None:
         raise UsageError(f"{args.scene}: the scene has no [animation] table to render frames of")
+    # The picture (or a turntable's frames) checked by the memory guard before anything is
+    # traced: a refusal names --size or --turntable's key and the limit.
+    picture = {k: v for k, v in _picture_options(scene, args.transparent).items() if k != "background"}
+    if not animating:
+        _ndtrace.check_picture_memory(list(scene.retina_shape), plain(picture))
+    else:
+        _ndtrace.check_picture_memory(list(scene.retina_shape), plain(dict(picture, turntable=0)))
     if args.dask:
         try:
-            from .cluster import connect, distributed_module
-
             distributed_module()
         except ImportError as e:
             raise UsageError(f"--dask: {e}") from None
@@ -443,12 +376,8 @@ def run(argv: list[str] | None = None) -> int:
 def _render(args: argparse.Namespace, scene: Scene, animating: bool, turntable: int, client) -> int:
     """Steps 2 and 3 of :func:`run`: trace (on ``client``'s Dask workers if given) and
     composite with a progress bar, then write each file atomically."""
-    from .composite import composite
-
     bar = Progress(args.quiet)
     if animating:
-        from .animation import animate
-
         video = None if args.video == "none" else args.video
         bar.begin("frames")
         paths = animate(scene, args.output, frames=args.frames, video=video,
@@ -461,27 +390,29 @@ def _render(args: argparse.Namespace, scene: Scene, animating: bool, turntable: 
             written = ([f"{len(pngs)} frames {pngs[0]} … {pngs[-1]}"] if pngs else []) + videos
             print("wrote " + " and ".join(written), file=sys.stderr)
         return 0
+    options = _picture_options(scene, args.transparent)
+    if (cut := sliced(scene, options.get("size"))) is not scene:
+        # The (N−1)-D slice is the scene to trace (the CLI's [slice], layout not "slice").
+        options = slice_options(options, cut.dim)
+        scene = cut
     bar.begin("tracing")
     retina = trace(scene, threads=args.threads, progress=bar.update, client=client)
     bar.end()
     if args.output.lower().endswith(".svg"):
-        from .svg import write_svg
-
         if turntable:
             raise UsageError("--turntable: an SVG is one drawing; write a .gif, .mp4 or .png")
         if args.retina:
             write_exr(args.retina, retina)
-        write_svg(args.output, retina, threads=args.threads, **_picture_options(scene, False))
+        write_svg(args.output, retina, threads=args.threads,
+                  **{**options, "background": _picture_options(scene, False)["background"]})
         if not args.quiet:
             print(f"wrote {args.output}" + (f" and {args.retina}" if args.retina else ""), file=sys.stderr)
         return 0
     bar.begin("compositing")
-    picture = composite(retina, **_picture_options(scene, args.transparent))
+    picture = slice_picture(scene, retina, options, threads=args.threads)
     bar.update(1, 1)
     bar.end()
     if turntable:
-        from .animation import write_frames
-
         if args.retina:
             write_exr(args.retina, retina)
         paths = write_frames(args.output, picture, TURNTABLE_FPS, keep_frames=args.keep_frames)
@@ -503,8 +434,6 @@ def main(argv: list[str] | None = None) -> None:
     given = sys.argv[1:] if argv is None else argv
     if given[:1] == ["view"]:  # a scene is a .toml or .py file, never "view"
         signal.signal(signal.SIGINT, signal.default_int_handler)  # see below
-        from .viewer.cli import main as view
-
         code = view(given[1:])
         # A frame may still be tracing in the worker thread (the GIL released, in the core):
         # end the process now rather than finalize the interpreter under a running native

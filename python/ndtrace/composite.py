@@ -8,32 +8,19 @@ defaults and allowed ranges are declared and checked once, there.
 from __future__ import annotations
 
 import numbers
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
 from . import _ndtrace
-from .files import c_array
+from ._description import plain
+from ._util import float32_array
 from .retina import Retina
-from .scene import _plain
 
 __all__ = ["composite", "scene_options", "MODES", "PROJECTIONS"]
 
 MODES: tuple[str, ...] = tuple(_ndtrace.COMPOSITE_MODES)
 PROJECTIONS: tuple[str, ...] = tuple(_ndtrace.PROJECTIONS)
-
-
-def _array(name: str, value) -> np.ndarray:
-    a = np.asarray(value)
-    if a.dtype == object or not (np.issubdtype(a.dtype, np.floating) or np.issubdtype(a.dtype, np.integer)
-                                 or a.dtype == np.bool_):
-        raise ValueError(f"{name}: expected a real numeric array, got dtype {a.dtype}")
-    if a.dtype.kind == "f" and a.dtype.itemsize > 4:
-        # Values beyond float32's range would become inf in the cast (NaN pictures).
-        big = np.flatnonzero(np.isfinite(a) & (np.abs(a.astype(np.float64)) > np.finfo(np.float32).max))
-        if big.size:
-            raise ValueError(f"{name}: value {a.flat[big[0]]} at index {big[0]} overflows float32")
-    return c_array(a, np.float32)
 
 
 def composite(
@@ -66,6 +53,7 @@ def composite(
     stereo_angle: float = 6.0,
     cutaway: dict | None = None,
     turntable: int = 0,
+    cubes: dict | None = None,
     threads: int | None = None,
 ) -> np.ndarray:
     """Composites a retina into a 2D picture: a float32 array ``(H, W, 4)``, linear RGBA, row 0
@@ -154,7 +142,10 @@ def composite(
       and three orthogonal sections through ``section`` in the others (top right across z:
       the retina slice face-on; bottom left across x: z right, y up; bottom right across y:
       x right, z down); ``"stereo"`` a side-by-side pair for parallel viewing, the left half
-      from ``azimuth − stereo_angle/2``, the right from ``azimuth + stereo_angle/2``.
+      from ``azimuth − stereo_angle/2``, the right from ``azimuth + stereo_angle/2``;
+      ``"slice"`` the view in the left half, the right half left for the scene's ``[slice]``
+      (the command line and :func:`ndtrace.animate` draw the slice there and mark the
+      hyperplane in the view: :func:`ndtrace.slicing.picture`).
     * ``section`` [(0, 0, 0)] — the world point (volume centred, longest side spanning
       [−1, 1]; x columns, y up, z slices) the sections pass through.
     * ``stereo_angle`` [6] — degrees between the eyes of the stereo pair, 0 … 30.
@@ -163,6 +154,10 @@ def composite(
       "offset": d}`` (removes n̂·x > d), ``{"shape": "sphere", "center": [...], "radius": r}``
       or ``{"shape": "box", "min": [...], "max": [...]}``; cells are removed smoothly by the
       fraction of a cell inside, and feature edges are cut with them.
+    * ``cubes`` [None] — for N ≥ 4, ``{"size": s}`` (0 < s ≤ 1, default 0.6): each occupied
+      cell (coverage ≥ ½) drawn as an opaque cube of side s cells, the course's "break into
+      tiny cubes: leave a little space instead of transparency", whatever the mode; faces
+      shaded by a headlight.
     * ``turntable`` [0] — F > 0 returns F frames, frame k seen from ``azimuth + 360°·k/F``:
       motion parallax for the price of one trace (the retina is prepared once).
     * ``threads`` [None = every core] — the picture is bit-identical whatever the number.
@@ -170,12 +165,12 @@ def composite(
     Raises ValueError naming the argument on bad input.
     """
     if isinstance(retina, Retina):
-        rgba = _array("retina.rgba", retina.rgba)
-        depth = _array("retina.depth", retina.depth)
+        rgba = float32_array("retina.rgba", retina.rgba)
+        depth = float32_array("retina.depth", retina.depth)
     else:
         if isinstance(retina, (str, bytes)) or retina is None:
             raise ValueError(f"retina: expected an ndtrace.Retina or an rgba array, got {type(retina).__name__}")
-        rgba = _array("retina", retina)
+        rgba = float32_array("retina", retina)
         depth = None
     if rgba.ndim < 2 or rgba.shape[-1] != 4:
         raise ValueError(f"retina: expected rgba of shape (..., 4) with 1 to 7 retina axes, got {rgba.shape}")
@@ -199,6 +194,8 @@ def composite(
                    stereo_angle=stereo_angle, turntable=turntable)
     if cutaway is not None:
         options["cutaway"] = cutaway
+    if cubes is not None:
+        options["cubes"] = cubes
     if background is not None:
         options["background"] = background
     if stages is not None:
@@ -207,11 +204,11 @@ def composite(
         options["edge_color"] = edge_color
     normal = camera = lines = None
     if isinstance(retina, Retina) and mode == "illustrative" and len(shape) >= 3:
-        normal = _array("retina.normal", retina.normal)
+        normal = float32_array("retina.normal", retina.normal)
         camera = retina._camera_info()
         if edges:
             lines = retina._edges(crease_angle)
-    return _ndtrace.composite(rgba, depth, _plain(options), threads, normal, camera, lines)
+    return _ndtrace.composite(rgba, depth, plain(options), threads, normal, camera, lines)
 
 
 def scene_options(description: dict) -> dict:

@@ -17,6 +17,12 @@ import math
 
 import numpy as np
 
+from ._util import picture_pixels
+from .composite import composite, scene_options
+from .files import write_image
+from .retina import Retina, trace
+from .scene import Scene, load_dict
+
 __all__ = ["show", "Picture", "PREVIEW_CELLS", "PREVIEW_SIZE"]
 
 #: Retina cells of a scene's preview (``Scene._repr_png_``): 48³ for a 4D scene.
@@ -49,8 +55,6 @@ class Picture:
 
     def save(self, path) -> None:
         """Writes the picture (any format of :func:`ndtrace.write_image`)."""
-        from .files import write_image
-
         write_image(path, self.pixels)
 
     def __repr__(self) -> str:
@@ -65,14 +69,7 @@ def show(image_or_retina, *, transparent: bool = False, **composite_options) -> 
     ``(H, W, 3)``, ``(H, W, 4)`` (shown unchanged), an :class:`ndtrace.Retina` (composited with
     ``composite_options``, e.g. ``mode="mip"``) or an :class:`ndtrace.Scene` (traced and
     composited with its own options). Bad input raises ValueError naming the argument."""
-    from .files import _pixels
-    from .retina import Retina
-    from .scene import Scene
-
     if isinstance(image_or_retina, Scene):
-        from .composite import scene_options
-        from .retina import trace
-
         options = dict(scene_options(image_or_retina.to_dict()), **composite_options)
         image_or_retina = trace(image_or_retina)
         picture = _composite(image_or_retina, options)
@@ -86,12 +83,10 @@ def show(image_or_retina, *, transparent: bool = False, **composite_options) -> 
             raise ValueError(f"image_or_retina: expected a picture array, an ndtrace.Retina or an "
                              f"ndtrace.Scene, got {type(image_or_retina).__name__}")
         picture = image_or_retina
-    return Picture(_pixels("image_or_retina", picture, transparent))
+    return Picture(picture_pixels("image_or_retina", picture, transparent))
 
 
 def _composite(retina, options: dict) -> np.ndarray:
-    from .composite import composite
-
     return composite(retina, **options)
 
 
@@ -102,16 +97,7 @@ def retina_png(retina) -> bytes:
 
 def retina_repr(retina) -> str:
     """``Retina.__repr__``: dimension, shape, hit fraction and depth range in one line."""
-    hit = retina.object_id >= 0
-    count = int(hit.sum())
-    frac = count / hit.size if hit.size else 0.0
-    if count:
-        d = retina.depth[hit]
-        depth = f"depth {float(d.min()):.4g}…{float(d.max()):.4g}"
-    else:
-        depth = "no hits"
-    shape = "×".join(map(str, retina.shape))
-    return f"<ndtrace.Retina dim={retina.dim} shape={shape} hit={frac:.1%} {depth}>"
+    return Retina.__repr__(retina)
 
 
 def camera_resolution(camera: dict, dim: int) -> list[int]:
@@ -134,10 +120,6 @@ def scene_png(scene) -> bytes:
     """``Scene._repr_png_``: the scene traced at a small resolution (about
     :data:`PREVIEW_CELLS` cells, one sample each) and composited with its own options at about
     :data:`PREVIEW_SIZE` pixels."""
-    from .composite import scene_options
-    from .retina import trace
-    from .scene import load_dict
-
     data = scene.to_dict()
     data.pop("animation", None)
     camera = data["camera"]
@@ -154,3 +136,10 @@ def scene_png(scene) -> bytes:
     elif dim == 3:
         options["size"] = None if max(res) >= PREVIEW_SIZE // 2 else (PREVIEW_SIZE, round(PREVIEW_SIZE * res[1] / res[0]))
     return show(_composite(trace(small), options))._repr_png_()
+
+
+# Scenes and retinas show these pictures in notebooks. Drawing them takes the tracer and the
+# compositor, which sit above the two classes, so this module gives the classes their
+# ``_repr_png_`` (declared there); ``import ndtrace`` imports it.
+Scene._repr_png_ = scene_png
+Retina._repr_png_ = retina_png

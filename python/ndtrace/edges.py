@@ -12,8 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import _ndtrace
-from .mesh import _angle
+from ._util import angle_degrees
 from .scene import Scene
 
 __all__ = ["visible_edges", "edge_segments"]
@@ -30,7 +29,7 @@ def edge_segments(scene: Scene, angle: float = 20.0) -> dict[str, np.ndarray]:
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected an ndtrace.Scene, got {type(scene).__name__}")
-    out = scene.compiled().edge_segments(_angle(angle))
+    out = scene.compiled().edge_segments(angle_degrees(angle))
     n = scene.dim
     return {
         "visible": np.asarray(out["visible"]).reshape(-1, 2, n),

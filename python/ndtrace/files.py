@@ -2,18 +2,19 @@
 TIFF through Pillow (format: docs/retina-format.md).
 
 Every file is written to a temporary file and renamed into place: an interrupted or failed
-write never leaves a broken file where a good one was.
+write never leaves a broken file where a good one was. A new file gets the mode the umask gives
+(0644 under umask 022), a file replaced keeps its own.
 """
 
 from __future__ import annotations
 
 import numbers
 import os
-import tempfile
 
 import numpy as np
 
 from . import _ndtrace
+from ._util import c_array, output_done, output_temp, picture_array, picture_pixels
 from .retina import Retina
 
 __all__ = ["write_exr", "read_exr", "write_png", "write_image", "IMAGE_FORMATS"]
@@ -23,24 +24,6 @@ IMAGE_FORMATS: dict[str, str] = {".png": "PNG", ".jpg": "JPEG", ".jpeg": "JPEG",
                                  ".webp": "WEBP", ".tif": "TIFF", ".tiff": "TIFF"}
 
 _EXTS = (".exr",)
-
-
-def c_array(a, dtype=None) -> np.ndarray:
-    """``a`` as a C-ordered, aligned array of ``dtype`` (a copy only if needed), as the core
-    reads arrays: pickled arrays (Dask, multiprocessing) can come back unaligned."""
-    return np.require(a, dtype=dtype, requirements=["C_CONTIGUOUS", "ALIGNED"])
-
-
-def _image(name: str, image) -> np.ndarray:
-    a = np.asarray(image)
-    if a.ndim != 3 or a.shape[2] != 4 or a.shape[0] == 0 or a.shape[1] == 0:
-        raise ValueError(f"{name}: expected an image of shape (H, W, 4), got {a.shape}")
-    if a.dtype.kind not in "biuf":
-        raise ValueError(f"{name}: expected real numbers, got dtype {a.dtype}")
-    a = c_array(a, np.float32)
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name}: the image holds NaN or infinite values")
-    return a
 
 
 def _check_ext(path: str, exts: tuple[str, ...], what: str) -> None:
@@ -67,7 +50,7 @@ def write_exr(path: str | os.PathLike, image_or_retina, *, depth=None) -> None:
             r.camera,
         )
         return
-    img = _image("image", image_or_retina)
+    img = picture_array("image", image_or_retina)
     if depth is not None:
         depth = c_array(depth, np.float32)
         if depth.shape != img.shape[:2]:
@@ -85,26 +68,6 @@ def read_exr(path: str | os.PathLike):
                       object_id=out["object_id"], primitive_id=out["primitive_id"],
                       camera=out["camera"])
     return out["rgba"]
-
-
-def _pixels(name: str, image, transparent: bool) -> np.ndarray:
-    """The 8-bit pixels of a picture: uint8 arrays as they are; real arrays are linear, as
-    (H, W) grey, (H, W, 3) RGB or (H, W, 4) premultiplied RGBA, encoded as sRGB, RGBA as its
-    colour over its background (opaque RGB) or, when ``transparent``, with straight alpha."""
-    a = np.asarray(image)
-    if not (a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (3, 4))) or 0 in a.shape[:2]:
-        raise ValueError(f"{name}: expected an image of shape (H, W), (H, W, 3) or (H, W, 4), "
-                         f"got {a.shape}")
-    if a.dtype == np.uint8:
-        return c_array(a)
-    if a.ndim == 3 and a.shape[2] == 4:
-        return to_srgb8(_image(name, a), opaque=not transparent)
-    if a.dtype.kind not in "biuf":
-        raise ValueError(f"{name}: expected real numbers, got dtype {a.dtype}")
-    rgb = a[..., None].repeat(3, axis=-1) if a.ndim == 2 else a
-    rgba = np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,), rgb.dtype)], axis=-1)
-    out = to_srgb8(_image(name, rgba), opaque=True)
-    return np.ascontiguousarray(out[..., 0]) if a.ndim == 2 else out
 
 
 def write_image(path: str | os.PathLike, image, *, transparent: bool = False,
@@ -127,7 +90,7 @@ def write_image(path: str | os.PathLike, image, *, transparent: bool = False,
         raise ValueError(f"{path}: unknown extension for a picture: expected "
                          f"{', '.join(IMAGE_FORMATS)}")
     kind = IMAGE_FORMATS[ext]
-    pixels = _pixels("image", image, transparent)
+    pixels = picture_pixels("image", image, transparent)
     if kind == "JPEG" and pixels.ndim == 3 and pixels.shape[2] == 4:
         raise ValueError(f"{path}: JPEG has no alpha channel: write .png, .webp or .tif for "
                          "transparency")
@@ -137,11 +100,10 @@ def write_image(path: str | os.PathLike, image, *, transparent: bool = False,
     from PIL import Image
 
     options = {"quality": int(quality)} if kind in ("JPEG", "WEBP") else {}
-    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.tmp-", suffix=ext, dir=folder)
-    os.close(fd)
+    tmp = output_temp(path, ext)
     try:
         Image.fromarray(pixels).save(tmp, format=kind, **options)
-        os.replace(tmp, path)
+        output_done(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
@@ -161,4 +123,4 @@ def to_srgb8(image, *, opaque: bool = False) -> np.ndarray:
     """A picture ``(H, W, 4)`` (premultiplied linear RGBA) as 8-bit sRGB: ``(H, W, 4)`` with
     straight alpha (what :func:`write_png` stores), or with ``opaque`` ``(H, W, 3)`` of the
     colour as it is (the composite over its background: what GIF and MP4 frames show)."""
-    return _ndtrace.to_srgb8(_image("image", image), opaque)
+    return _ndtrace.to_srgb8(picture_array("image", image), opaque)

@@ -30,6 +30,7 @@ from typing import Literal
 import numpy as np
 
 from . import _ndtrace
+from ._util import batch_size, broadcast_batch, finite_float64
 
 _k = _ndtrace.geometry
 
@@ -49,26 +50,6 @@ __all__ = [
 Degeneracy = Literal["raise", "nan"]
 
 
-def _array(name: str, value, min_ndim: int, shape_text: str) -> np.ndarray:
-    """``value`` as a float64 array with at least ``min_ndim`` axes and finite entries."""
-    try:
-        raw = np.asarray(value)
-    except (TypeError, ValueError) as e:
-        raise ValueError(f"{name}: expected a float array of shape {shape_text}: {e}") from None
-    if raw.dtype.kind not in "biuf":
-        raise ValueError(
-            f"{name}: expected real numbers (a float array of shape {shape_text}),"
-            f" got dtype {raw.dtype}"
-        )
-    a = raw.astype(np.float64, copy=False)
-    if a.ndim < min_ndim:
-        raise ValueError(f"{name}: expected shape {shape_text}, got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        bad = tuple(int(i) for i in np.argwhere(~np.isfinite(a))[0])
-        raise ValueError(f"{name}: non-finite value {a[bad]} at index {bad}")
-    return a
-
-
 def _dim(name: str, n: int, shape_text: str, shape: tuple) -> int:
     if not (_ndtrace.MIN_DIM <= n <= _ndtrace.MAX_DIM):
         raise ValueError(
@@ -78,35 +59,16 @@ def _dim(name: str, n: int, shape_text: str, shape: tuple) -> int:
     return n
 
 
-def _broadcast(args: list[tuple[str, np.ndarray, int]]) -> tuple[tuple, list[np.ndarray]]:
-    """Broadcasts the leading (batch) axes; each entry is (name, array, number of core axes)."""
-    leads = [a.shape[: a.ndim - core] for _, a, core in args]
-    try:
-        batch = np.broadcast_shapes(*leads)
-    except ValueError:
-        desc = ", ".join(f"{n} {a.shape}" for n, a, _ in args)
-        raise ValueError(f"batch axes do not broadcast: {desc}") from None
-    out = [
-        np.ascontiguousarray(np.broadcast_to(a, batch + a.shape[a.ndim - core :]))
-        for _, a, core in args
-    ]
-    return batch, out
-
-
 def _raise(degenerate: str) -> bool:
     if degenerate not in ("raise", "nan"):
         raise ValueError(f'degenerate: expected "raise" or "nan", got {degenerate!r}')
     return degenerate == "raise"
 
 
-def _count(batch: tuple) -> int:
-    return int(np.prod(batch, dtype=np.int64))
-
-
 def _simplex(name: str, points, rows: str) -> tuple[np.ndarray, int]:
     """Points of shape (..., rows, N); ``rows`` is 'N-1', 'N', 'N+1' — returns (array, N)."""
     shape_text = f"(..., {rows}, N)"
-    p = _array(name, points, 2, shape_text)
+    p = finite_float64(name, points, 2, shape_text)
     n = _dim(name, p.shape[-1], shape_text, p.shape)
     want = {"N-1": n - 1, "N": n, "N+1": n + 1}[rows]
     if p.shape[-2] != want:
@@ -117,7 +79,7 @@ def _simplex(name: str, points, rows: str) -> tuple[np.ndarray, int]:
 
 
 def _vector(name: str, x, n: int) -> np.ndarray:
-    a = _array(name, x, 1, f"(..., {n})")
+    a = finite_float64(name, x, 1, f"(..., {n})")
     if a.shape[-1] != n:
         raise ValueError(f"{name}: expected shape (..., {n}) to match the points, got {a.shape}")
     return a
@@ -133,7 +95,7 @@ def generalized_cross(edges) -> np.ndarray:
     e, n = _simplex("edges", edges, "N-1")
     batch = e.shape[:-2]
     e = np.ascontiguousarray(e)
-    return _k.generalized_cross(n, _count(batch), e).reshape(batch + (n,))
+    return _k.generalized_cross(n, batch_size(batch), e).reshape(batch + (n,))
 
 
 def signed_volume(points) -> np.ndarray:
@@ -141,20 +103,20 @@ def signed_volume(points) -> np.ndarray:
     ``det[x_1−x_0 … x_N−x_0] / N!``; the standard simplex has +1/N!."""
     p, n = _simplex("points", points, "N+1")
     batch = p.shape[:-2]
-    return _k.signed_volume(n, _count(batch), np.ascontiguousarray(p)).reshape(batch)
+    return _k.signed_volume(n, batch_size(batch), np.ascontiguousarray(p)).reshape(batch)
 
 
 def gram_volume(points) -> np.ndarray:
     """Unsigned K-volume (eqs. 4–5) of K-simplices ``(..., K+1, N)``, 1 ≤ K ≤ N → ``(...)``:
     ``√det G / K!`` with G the Gram matrix of the edges."""
     shape_text = "(..., K+1, N) with 1 ≤ K ≤ N"
-    p = _array("points", points, 2, shape_text)
+    p = finite_float64("points", points, 2, shape_text)
     n = _dim("points", p.shape[-1], shape_text, p.shape)
     k = p.shape[-2] - 1
     if not 1 <= k <= n:
         raise ValueError(f"points: expected shape {shape_text}, got {p.shape} (K = {k})")
     batch = p.shape[:-2]
-    return _k.gram_volume(n, k, _count(batch), np.ascontiguousarray(p)).reshape(batch)
+    return _k.gram_volume(n, k, batch_size(batch), np.ascontiguousarray(p)).reshape(batch)
 
 
 def hyperplane(points, *, degenerate: Degeneracy = "raise") -> tuple[np.ndarray, np.ndarray]:
@@ -162,7 +124,7 @@ def hyperplane(points, *, degenerate: Degeneracy = "raise") -> tuple[np.ndarray,
     n̂ the unit normal in the direction of ``generalized_cross`` and ``c = n̂·x_0``."""
     p, n = _simplex("points", points, "N")
     batch = p.shape[:-2]
-    out = _k.hyperplane(n, _count(batch), np.ascontiguousarray(p), _raise(degenerate))
+    out = _k.hyperplane(n, batch_size(batch), np.ascontiguousarray(p), _raise(degenerate))
     out = out.reshape(batch + (n + 1,))
     return out[..., :n], out[..., n]
 
@@ -175,8 +137,8 @@ def point_hyperplane_distance(
     (V_N the signed volume of (x_0, …, x_{N−1}, x), x last) and ``p = x − h·n̂``."""
     p, n = _simplex("points", points, "N")
     xs = _vector("x", x, n)
-    batch, (xs, p) = _broadcast([("x", xs, 1), ("points", p, 2)])
-    out = _k.point_hyperplane_distance(n, _count(batch), xs, p, _raise(degenerate))
+    batch, (xs, p) = broadcast_batch([("x", xs, 1), ("points", p, 2)])
+    out = _k.point_hyperplane_distance(n, batch_size(batch), xs, p, _raise(degenerate))
     out = out.reshape(batch + (n + 1,))
     return out[..., 0], out[..., 1:]
 
@@ -186,14 +148,14 @@ def barycentric(x, points, *, degenerate: Degeneracy = "raise") -> np.ndarray:
     K ≤ N → ``(..., K+1)`` summing to 1, from the invariant Gram/Cramer form (for K < N, of the
     orthogonal projection of x onto the simplex's affine hull). x is inside iff all are ≥ 0."""
     shape_text = "(..., K+1, N) with 1 ≤ K ≤ N"
-    p = _array("points", points, 2, shape_text)
+    p = finite_float64("points", points, 2, shape_text)
     n = _dim("points", p.shape[-1], shape_text, p.shape)
     k = p.shape[-2] - 1
     if not 1 <= k <= n:
         raise ValueError(f"points: expected shape {shape_text}, got {p.shape} (K = {k})")
     xs = _vector("x", x, n)
-    batch, (xs, p) = _broadcast([("x", xs, 1), ("points", p, 2)])
-    out = _k.barycentric(n, k, _count(batch), xs, p, _raise(degenerate))
+    batch, (xs, p) = broadcast_batch([("x", xs, 1), ("points", p, 2)])
+    out = _k.barycentric(n, k, batch_size(batch), xs, p, _raise(degenerate))
     return out.reshape(batch + (k + 1,))
 
 
@@ -203,8 +165,8 @@ def side(x, points) -> np.ndarray:
     normal points), 0 on (to a relative 1e-12), −1 below; 0 for a degenerate hyperplane."""
     p, n = _simplex("points", points, "N")
     xs = _vector("x", x, n)
-    batch, (xs, p) = _broadcast([("x", xs, 1), ("points", p, 2)])
-    return _k.side(n, _count(batch), xs, p).reshape(batch).astype(np.int8)
+    batch, (xs, p) = broadcast_batch([("x", xs, 1), ("points", p, 2)])
+    return _k.side(n, batch_size(batch), xs, p).reshape(batch).astype(np.int8)
 
 
 def clip_segment(a, b, points, *, degenerate: Degeneracy = "raise") -> np.ndarray:
@@ -213,8 +175,8 @@ def clip_segment(a, b, points, *, degenerate: Degeneracy = "raise") -> np.ndarra
     ``0 ≤ t ≤ 1``. A segment parallel to the hyperplane is degenerate."""
     p, n = _simplex("points", points, "N")
     av, bv = _vector("a", a, n), _vector("b", b, n)
-    batch, (av, bv, p) = _broadcast([("a", av, 1), ("b", bv, 1), ("points", p, 2)])
-    return _k.clip_segment(n, _count(batch), av, bv, p, _raise(degenerate)).reshape(batch)
+    batch, (av, bv, p) = broadcast_batch([("a", av, 1), ("b", bv, 1), ("points", p, 2)])
+    return _k.clip_segment(n, batch_size(batch), av, bv, p, _raise(degenerate)).reshape(batch)
 
 
 def ray_hyperplane(origin, direction, points, *, degenerate: Degeneracy = "raise") -> np.ndarray:
@@ -223,8 +185,8 @@ def ray_hyperplane(origin, direction, points, *, degenerate: Degeneracy = "raise
     normalized), so the hit is ``origin + t·direction``. Parallel rays are degenerate."""
     p, n = _simplex("points", points, "N")
     c, d = _vector("origin", origin, n), _vector("direction", direction, n)
-    batch, (c, d, p) = _broadcast([("origin", c, 1), ("direction", d, 1), ("points", p, 2)])
-    return _k.ray_hyperplane(n, _count(batch), c, d, p, _raise(degenerate)).reshape(batch)
+    batch, (c, d, p) = broadcast_batch([("origin", c, 1), ("direction", d, 1), ("points", p, 2)])
+    return _k.ray_hyperplane(n, batch_size(batch), c, d, p, _raise(degenerate)).reshape(batch)
 
 
 def transform_normal(matrix, normal) -> np.ndarray:
@@ -232,10 +194,10 @@ def transform_normal(matrix, normal) -> np.ndarray:
     Normals Vectors? Almost!"): ``cof(M)·N`` with ``cof(M) = det(M)·M^{−T}`` the cofactor
     matrix, which equals the generalized cross product of the transformed edges. For an
     orthogonal R it is ``det(R)·R·N`` (a reflection flips it). Singular M are allowed."""
-    m = _array("matrix", matrix, 2, "(..., N, N)")
+    m = finite_float64("matrix", matrix, 2, "(..., N, N)")
     n = _dim("matrix", m.shape[-1], "(..., N, N)", m.shape)
     if m.shape[-2] != n:
         raise ValueError(f"matrix: expected shape (..., N, N), got {m.shape}")
     nv = _vector("normal", normal, n)
-    batch, (m, nv) = _broadcast([("matrix", m, 2), ("normal", nv, 1)])
-    return _k.transform_normal(n, _count(batch), m, nv).reshape(batch + (n,))
+    batch, (m, nv) = broadcast_batch([("matrix", m, 2), ("normal", nv, 1)])
+    return _k.transform_normal(n, batch_size(batch), m, nv).reshape(batch + (n,))

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import ClassVar
 
 import numpy as np
 
-from .scene import Scene
+from . import _ndtrace
+from ._dask import trace_slabs
+from .scene import Scene, load_toml
 
 __all__ = ["Retina", "trace"]
 
@@ -33,7 +36,7 @@ class Retina:
     primitive_id: np.ndarray
     camera: str | None = None
     """The scene's ``[camera]`` section as TOML (stored in retina files)."""
-    _source: object = field(default=None, repr=False, compare=False)
+    _source: _ndtrace.CompiledScene | None = field(default=None, repr=False, compare=False)
     """The compiled scene this retina was traced from (its edges and camera), if any."""
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -45,8 +48,6 @@ class Retina:
             if self._source is not None:
                 info = self._source.retina_camera()
             elif self.camera:
-                from .scene import load_toml
-
                 try:
                     info = load_toml(f"dim = {self.dim}\n{self.camera}\n").compiled().retina_camera()
                 except ValueError:
@@ -76,15 +77,22 @@ class Retina:
 
     def __repr__(self) -> str:
         """One line: dimension, shape, hit fraction and depth range (not the arrays)."""
-        from .display import retina_repr
+        hit = self.hit
+        count = int(hit.sum())
+        frac = count / hit.size if hit.size else 0.0
+        if count:
+            d = self.depth[hit]
+            depth = f"depth {float(d.min()):.4g}…{float(d.max()):.4g}"
+        else:
+            depth = "no hits"
+        shape = "×".join(map(str, self.shape))
+        return f"<ndtrace.Retina dim={self.dim} shape={shape} hit={frac:.1%} {depth}>"
 
-        return retina_repr(self)
-
-    def _repr_png_(self) -> bytes:
-        """The default composite (``ndtrace.composite(retina)``) as PNG, for notebooks."""
-        from .display import retina_png
-
-        return retina_png(self)
+    #: The notebook picture (Jupyter's ``_repr_png_``): the default composite
+    #: (``ndtrace.composite(retina)``) as PNG. Compositing is a layer above this module, so
+    #: :mod:`ndtrace.display`, which ``import ndtrace`` loads, sets it
+    #: (:func:`ndtrace.display.retina_png`).
+    _repr_png_: ClassVar[Callable[[Retina], bytes]]
 
 
 def trace(
@@ -115,8 +123,6 @@ def trace(
         raise ValueError(f"threads: expected a positive integer or None, got {threads!r}")
     compiled = scene.compiled()
     if client is not None:
-        from .cluster import trace_slabs
-
         out = trace_slabs(scene, client, threads, progress)
     else:
         out = compiled.trace(threads, progress)

@@ -47,6 +47,16 @@ Conventions
 * ``look_at`` returns exactly the orientation of a scene's ``look_at`` camera: columns
   u_1 … u_{N−1}, then the view direction, with ``det[u_1 … u_{N−1}, −view] = +1`` — so its
   determinant is −1 (a camera frame, not a rotation).
+* Splines through keyframes (rotations paper, "the explicit 4D extension of 3D quaternion
+  orientation splines"): ``quaternion_spline(keys, times, t)`` is Shoemake's Bézier
+  construction evaluated by de Casteljau's algorithm with slerps, its inner control points
+  from Catmull–Rom tangents weighted for unequal times as in Schlag (Graphics Gems II), C¹ in
+  time, the shorter arc between neighbours, the slerp itself for two keys;
+  ``so4_spline(left_keys, right_keys, times, t)`` is the course's double-quaternion form, one
+  spline per S³ factor (the pairs' signs chosen jointly); ``so_n_spline(keys, times, t)`` —
+  beyond the course, which says explicit splines for N > 4 are unknown — runs the same
+  construction in SO(N) itself, its geodesics through the matrix logarithm and exponential.
+  Times outside the keys' span are clamped to it.
 * Nested spheres (SO(N)/SO(N−1) = S^{N−1}): ``to_nested_spheres(R)`` gives v_N = R[:, -1]
   on S^{N−1}, then the same for the SO(N−1) block left after undoing the minimal rotation
   taking e_N to v_N, down to v_2 on S^1; ``from_nested_spheres`` rebuilds
@@ -56,12 +66,13 @@ Conventions
 from __future__ import annotations
 
 import operator
-from typing import Literal, Sequence
+from collections.abc import Sequence
+from typing import Literal
 
 import numpy as np
 
 from . import _ndtrace
-from .geometry import _array, _broadcast, _count
+from ._util import batch_size, broadcast_batch, finite_float64
 
 _k = _ndtrace.rotation
 
@@ -84,6 +95,9 @@ __all__ = [
     "quaternions_from_so4",
     "slerp_so4",
     "arcball_4d",
+    "quaternion_spline",
+    "so4_spline",
+    "so_n_spline",
 ]
 
 _DIMS = f"{_ndtrace.MIN_DIM}..{_ndtrace.MAX_DIM}"
@@ -126,7 +140,7 @@ def _n(name: str, n: int, shape: tuple | None = None) -> int:
 
 def _square(name: str, value) -> tuple[np.ndarray, int]:
     """A stack of square matrices (..., N, N) → (array, N)."""
-    m = _array(name, value, 2, "(..., N, N)")
+    m = finite_float64(name, value, 2, "(..., N, N)")
     if m.shape[-1] != m.shape[-2]:
         raise ValueError(f"{name}: expected shape (..., N, N), got {m.shape}")
     return m, _n(name, m.shape[-1], m.shape)
@@ -134,14 +148,14 @@ def _square(name: str, value) -> tuple[np.ndarray, int]:
 
 def _fixed(name: str, value, width: int, what: str = "") -> np.ndarray:
     """An array of shape (..., width)."""
-    a = _array(name, value, 1, f"(..., {width})")
+    a = finite_float64(name, value, 1, f"(..., {width})")
     if a.shape[-1] != width:
         raise ValueError(f"{name}: expected shape (..., {width}){what}, got {a.shape}")
     return a
 
 
 def _times(t) -> np.ndarray:
-    return _array("t", t, 0, "() or (T...)")
+    return finite_float64("t", t, 0, "() or (T...)")
 
 
 def plane(n: int, i: int, j: int, theta) -> np.ndarray:
@@ -149,19 +163,19 @@ def plane(n: int, i: int, j: int, theta) -> np.ndarray:
     (``R e_i = cos θ e_i + sin θ e_j``), θ in radians, scalar or array (...) → (..., n, n)."""
     n = _n("n", _int("n", n))
     i, j = _axis("i", i), _axis("j", j)  # the plane itself is checked by the kernel
-    th = _array("theta", theta, 0, "() or (...)")
+    th = finite_float64("theta", theta, 0, "() or (...)")
     return _k.plane(n, i, j, _c(th).reshape(-1)).reshape(th.shape + (n, n))
 
 
 def compose(rotations) -> np.ndarray:
     """The product of rotations ``(..., K, N, N)`` with the first acting first:
     ``compose([R_1, …, R_k]) = R_k ⋯ R_1`` → ``(..., N, N)``. Each must be a rotation."""
-    r = _array("rotations", rotations, 3, "(..., K, N, N)")
+    r = finite_float64("rotations", rotations, 3, "(..., K, N, N)")
     if r.shape[-1] != r.shape[-2]:
         raise ValueError(f"rotations: expected shape (..., K, N, N), got {r.shape}")
     n = _n("rotations", r.shape[-1], r.shape)
     batch, k = r.shape[:-3], r.shape[-3]
-    return _k.compose(n, k, _count(batch), _c(r).reshape(-1)).reshape(batch + (n, n))
+    return _k.compose(n, k, batch_size(batch), _c(r).reshape(-1)).reshape(batch + (n, n))
 
 
 def rolling_ball(displacement, radius: float = 1.0,
@@ -169,7 +183,7 @@ def rolling_ball(displacement, radius: float = 1.0,
     """The N-D rolling ball M_N (eq. 5) for controller displacements ``(..., N−1)`` →
     ``(..., N, N)``: turns the last axis toward the displacement direction n̂ by θ with
     ``tan θ = r/R`` (``angle="course"``) or ``θ = r/R`` (``angle="arc"``). Zero → identity."""
-    d = _array("displacement", displacement, 1, "(..., N−1)")
+    d = finite_float64("displacement", displacement, 1, "(..., N−1)")
     n = d.shape[-1] + 1
     if not (_ndtrace.MIN_DIM <= n <= _ndtrace.MAX_DIM):
         raise ValueError(
@@ -190,13 +204,13 @@ def frame(vectors) -> np.ndarray:
     ``frame([])`` and ``frame([e_0])`` are the identity and ``frame([a])[:, 1]`` is the axis
     least aligned with a. N vectors that form a left-handed frame, or dependent vectors, raise
     ValueError."""
-    v = _array("vectors", vectors, 2, "(..., K, N)")
+    v = finite_float64("vectors", vectors, 2, "(..., K, N)")
     n = _n("vectors", v.shape[-1], v.shape)
     k = v.shape[-2]
     if k > n:
         raise ValueError(f"vectors: expected shape (..., K, N) with K ≤ N, got {v.shape}")
     batch = v.shape[:-2]
-    return _k.frame(n, k, _count(batch), _c(v).reshape(-1)).reshape(batch + (n, n))
+    return _k.frame(n, k, batch_size(batch), _c(v).reshape(-1)).reshape(batch + (n, n))
 
 
 def rotation_between(a, b) -> np.ndarray:
@@ -205,10 +219,10 @@ def rotation_between(a, b) -> np.ndarray:
     orthogonal to both (``R v = v − (a + b)((a + b)·v)/(1 + a·b) + 2b(a·v)``), built as a
     product of two reflections so it is exactly orthogonal with det +1. Antipodal pairs turn by
     π in the plane of a and the coordinate axis least aligned with a."""
-    av = _array("a", a, 1, "(..., N)")
+    av = finite_float64("a", a, 1, "(..., N)")
     n = _n("a", av.shape[-1], av.shape)
     bv = _fixed("b", b, n, " to match a")
-    batch, (av, bv) = _broadcast([("a", av, 1), ("b", bv, 1)])
+    batch, (av, bv) = broadcast_batch([("a", av, 1), ("b", bv, 1)])
     return _k.rotation_between(n, av.reshape(-1), bv.reshape(-1)).reshape(batch + (n, n))
 
 
@@ -216,14 +230,14 @@ def look_at(position, target, up=None) -> np.ndarray:
     """The orientation of a ``look_at`` camera at ``position`` looking at ``target`` with
     ``up`` (N−2 vectors; one vector for N = 3; none for N = 2) — exactly what a scene's
     ``camera.look_at`` builds: columns u_1 … u_{N−1}, view, and det −1."""
-    p = _array("position", position, 1, "(N,)")
+    p = finite_float64("position", position, 1, "(N,)")
     if p.ndim != 1:
         raise ValueError(f"position: expected shape (N,), got {p.shape}")
     n = _n("position", p.shape[0], p.shape)
-    t = _array("target", target, 1, f"({n},)")
+    t = finite_float64("target", target, 1, f"({n},)")
     if t.shape != (n,):
         raise ValueError(f"target: expected shape ({n},), got {t.shape}")
-    u = np.zeros((0, n)) if up is None else _array("up", up, 1, f"({n - 2}, {n})")
+    u = np.zeros((0, n)) if up is None else finite_float64("up", up, 1, f"({n - 2}, {n})")
     if u.ndim == 1 and n == 3:
         u = u[None, :]
     if u.shape != (n - 2, n):
@@ -236,10 +250,10 @@ def slerp(a, b, t) -> np.ndarray:
     (broadcast) at ``t`` (scalar or array): constant angular speed, ``angle(a, slerp) = t·θ``
     → ``t.shape + batch + (N,)``. Antipodal pairs turn in the plane of a and the coordinate
     axis least aligned with it."""
-    av = _array("a", a, 1, "(..., N)")
+    av = finite_float64("a", a, 1, "(..., N)")
     n = _n("a", av.shape[-1], av.shape)
     bv = _fixed("b", b, n, " to match a")
-    batch, (av, bv) = _broadcast([("a", av, 1), ("b", bv, 1)])
+    batch, (av, bv) = broadcast_batch([("a", av, 1), ("b", bv, 1)])
     ts = _times(t)
     out = _k.slerp(n, av.reshape(-1), bv.reshape(-1), _c(ts).reshape(-1))
     return out.reshape(ts.shape + batch + (n,))
@@ -263,7 +277,7 @@ def from_nested_spheres(vectors: Sequence) -> np.ndarray:
     ``[v_N (..., N), …, v_2 (..., 2)]`` (each a unit vector; batch axes broadcast)."""
     if isinstance(vectors, np.ndarray) or not isinstance(vectors, (list, tuple)) or not vectors:
         raise ValueError("vectors: expected a list [v_N, v_{N−1}, …, v_2] of unit vectors")
-    first = _array("vectors[0]", vectors[0], 1, "(..., N)")
+    first = finite_float64("vectors[0]", vectors[0], 1, "(..., N)")
     n = _n("vectors[0]", first.shape[-1], first.shape)
     if len(vectors) != n - 1:
         raise ValueError(
@@ -274,7 +288,7 @@ def from_nested_spheres(vectors: Sequence) -> np.ndarray:
     for idx in range(1, n - 1):
         name = f"vectors[{idx}]"
         parts.append((name, _fixed(name, vectors[idx], n - idx), 1))
-    batch, arrays = _broadcast(parts)
+    batch, arrays = broadcast_batch(parts)
     packed = _c(np.concatenate(arrays, axis=-1))
     return _k.from_nested_spheres(n, packed.reshape(-1)).reshape(batch + (n, n))
 
@@ -283,7 +297,7 @@ def nested_slerp(R0, R1, t) -> np.ndarray:
     """Interpolates rotations ``R0``, ``R1`` ``(N, N)`` by slerping each nested-sphere vector,
     at ``t`` (scalar or array) → ``t.shape + (N, N)``; t = 0 gives R0, t = 1 gives R1."""
     a, n = _square("R0", R0)
-    b = _array("R1", R1, 2, f"({n}, {n})")
+    b = finite_float64("R1", R1, 2, f"({n}, {n})")
     if a.shape != (n, n) or b.shape != (n, n):
         raise ValueError(f"R0, R1: expected two ({n}, {n}) rotations, got {a.shape} and {b.shape}")
     ts = _times(t)
@@ -293,7 +307,7 @@ def nested_slerp(R0, R1, t) -> np.ndarray:
 def quat_multiply(a, b) -> np.ndarray:
     """Quaternion product ``a * b`` of ``(..., 4)`` arrays (scalar first), batch broadcast."""
     av, bv = _fixed("a", a, 4), _fixed("b", b, 4)
-    batch, (av, bv) = _broadcast([("a", av, 1), ("b", bv, 1)])
+    batch, (av, bv) = broadcast_batch([("a", av, 1), ("b", bv, 1)])
     return _k.quat_multiply(av.reshape(-1), bv.reshape(-1)).reshape(batch + (4,))
 
 
@@ -318,11 +332,11 @@ def matrix_to_quat(R, continuous: bool = True) -> np.ndarray:
     choice gives continuous curves on S³. So items after the first may have q0 < 0. For a batch
     of *unrelated* rotations pass ``continuous=False``: then every quaternion has q0 ≥ 0
     (rotation angle in [0, π]). A single matrix (3, 3) always gets q0 ≥ 0."""
-    m = _array("R", R, 2, "(..., 3, 3)")
+    m = finite_float64("R", R, 2, "(..., 3, 3)")
     if m.shape[-2:] != (3, 3):
         raise ValueError(f"R: expected shape (..., 3, 3), got {m.shape}")
     batch = m.shape[:-2]
-    stride = _count(batch[1:]) if (continuous and len(batch) >= 1) else 0
+    stride = batch_size(batch[1:]) if (continuous and len(batch) >= 1) else 0
     return _k.matrix_to_quat(_c(m).reshape(-1), stride).reshape(batch + (4,))
 
 
@@ -330,14 +344,14 @@ def so4_from_quaternions(q, p) -> np.ndarray:
     """The 4D rotations ``v ↦ q v p̄`` of unit quaternions ``q``, ``p`` ``(..., 4)`` →
     ``(..., 4, 4)``; with p = q: 1 at [0, 0] and ``quat_to_matrix(q)`` in the lower 3×3."""
     qv, pv = _fixed("q", q, 4), _fixed("p", p, 4)
-    batch, (qv, pv) = _broadcast([("q", qv, 1), ("p", pv, 1)])
+    batch, (qv, pv) = broadcast_batch([("q", qv, 1), ("p", pv, 1)])
     return _k.so4_from_quaternions(qv.reshape(-1), pv.reshape(-1)).reshape(batch + (4, 4))
 
 
 def quaternions_from_so4(R) -> tuple[np.ndarray, np.ndarray]:
     """The unit quaternion pairs ``(q, p)`` of 4D rotations ``(..., 4, 4)``, up to the shared
     sign, with ``so4_from_quaternions(q, p) = R``."""
-    m = _array("R", R, 2, "(..., 4, 4)")
+    m = finite_float64("R", R, 2, "(..., 4, 4)")
     if m.shape[-2:] != (4, 4):
         raise ValueError(f"R: expected shape (..., 4, 4), got {m.shape}")
     batch = m.shape[:-2]
@@ -346,7 +360,7 @@ def quaternions_from_so4(R) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _pair(name: str, qp) -> tuple[np.ndarray, np.ndarray]:
-    a = _array(name, qp, 2, "(2, 4)")
+    a = finite_float64(name, qp, 2, "(2, 4)")
     if a.shape != (2, 4):
         raise ValueError(f"{name}: expected a pair (q, p) of quaternions, shape (2, 4), got {a.shape}")
     return _c(a[0]), _c(a[1])
@@ -369,7 +383,78 @@ def arcball_4d(a0, a1, b0, b1) -> np.ndarray:
     ``so4_from_quaternions(a1 ā0, b1 b̄0)``, the rotation ``v ↦ a1 ā0 v b0 b̄1`` taking
     ``a0 b̄0`` to ``a1 b̄1`` → ``(..., 4, 4)``."""
     args = [(name, _fixed(name, v, 4), 1) for name, v in (("a0", a0), ("a1", a1), ("b0", b0), ("b1", b1))]
-    batch, (x0, x1, y0, y1) = _broadcast(args)
+    batch, (x0, x1, y0, y1) = broadcast_batch(args)
     return _k.arcball_4d(x0.reshape(-1), x1.reshape(-1), y0.reshape(-1), y1.reshape(-1)).reshape(
         batch + (4, 4)
     )
+
+
+def _key_times(times, count: int) -> np.ndarray:
+    ts = finite_float64("times", times, 1, "(K,)")
+    if ts.shape != (count,):
+        raise ValueError(f"times: expected shape ({count},), one time per key, got {ts.shape}")
+    if count < 2:
+        raise ValueError(f"keys: a spline needs at least two keys, got {count}")
+    bad = np.flatnonzero(np.diff(ts) <= 0)
+    if len(bad):
+        i = int(bad[0]) + 1
+        raise ValueError(f"times: must increase strictly: times[{i}] = {ts[i]} follows "
+                         f"{ts[i - 1]}")
+    return _c(ts)
+
+
+def _keys(name: str, keys) -> np.ndarray:
+    k = finite_float64(name, keys, 2, "(K, 4)")
+    if k.ndim != 2 or k.shape[1] != 4:
+        raise ValueError(f"{name}: expected unit quaternions of shape (K, 4), got {k.shape}")
+    return _c(k)
+
+
+def quaternion_spline(keys, times, t) -> np.ndarray:
+    """A C¹ spline of unit quaternions through ``keys`` ``(K, 4)`` at strictly increasing
+    ``times`` ``(K,)``, evaluated at ``t`` (scalar or array) → ``t.shape + (4,)``.
+
+    Shoemake's Bézier construction ("Animating rotation with quaternion curves", 1985) by de
+    Casteljau's algorithm with slerps; the inner control points ``a_i = q_i exp(ω_i Δt_i/3)``,
+    ``b_i = q_{i+1} exp(−ω_{i+1} Δt_i/3)`` come from the body-frame angular velocity ω_i, the
+    time-weighted mean of the neighbouring chords' ``log(q̄_i q_{i+1})/Δt_i`` (Catmull–Rom
+    tangents as in Schlag, Graphics Gems II, weighted for unequal times), so the velocity is
+    the same on both sides of a key. Neighbouring keys take the shorter arc (q_{i+1} → −q_{i+1}
+    when q_i·q_{i+1} < 0); the curve passes through the keys so signed. Two keys give the slerp.
+    ``t`` outside ``[times[0], times[-1]]`` is clamped. ValueError names ``keys``, ``times``
+    (not strictly increasing, wrong length, NaN) or ``t``."""
+    k = _keys("keys", keys)
+    ts = _key_times(times, len(k))
+    tt = _times(t)
+    return _k.quaternion_spline(k.reshape(-1), ts, _c(tt).reshape(-1)).reshape(tt.shape + (4,))
+
+
+def so4_spline(left_keys, right_keys, times, t) -> np.ndarray:
+    """The SO(4) spline through the rotations ``v ↦ q_i v p̄_i`` with ``q_i = left_keys[i]``,
+    ``p_i = right_keys[i]`` (each ``(K, 4)``) at ``times``, at ``t`` → ``t.shape + (4, 4)``:
+    the course's double-quaternion construction, ``so4_from_quaternions(q(t), p(t))`` with a
+    :func:`quaternion_spline` on each S³ factor. The pairs' signs are chosen jointly for the
+    shorter way (the smaller θ_q² + θ_p² between neighbours, as :func:`slerp_so4`)."""
+    left, right = _keys("left_keys", left_keys), _keys("right_keys", right_keys)
+    if len(right) != len(left):
+        raise ValueError(f"right_keys: expected {len(left)} keys like left_keys, got {len(right)}")
+    ts = _key_times(times, len(left))
+    tt = _times(t)
+    out = _k.so4_spline(left.reshape(-1), right.reshape(-1), ts, _c(tt).reshape(-1))
+    return out.reshape(tt.shape + (4, 4))
+
+
+def so_n_spline(keys, times, t) -> np.ndarray:
+    """Beyond the course: a C¹ spline through rotations ``keys`` ``(K, N, N)`` of SO(N), any N,
+    at ``times``, at ``t`` → ``t.shape + (N, N)``. The notes say explicit splines in SO(N) for
+    N > 4 are unknown; this runs the construction of :func:`quaternion_spline` in SO(N) itself,
+    its geodesics ``R_a expm(s logm(R_aᵀ R_b))`` (the bi-invariant metric's) through the matrix
+    logarithm and exponential. For N = 3 and 4 it gives the curves of the quaternion forms, to
+    rounding. Neighbouring keys must be less than a half turn apart."""
+    k, n = _square("keys", keys)
+    if k.ndim != 3:
+        raise ValueError(f"keys: expected rotations of shape (K, N, N), got {k.shape}")
+    ts = _key_times(times, len(k))
+    tt = _times(t)
+    out = _k.so_n_spline(n, _c(k).reshape(-1), ts, _c(tt).reshape(-1))
+    return out.reshape(tt.shape + (n, n))

@@ -14,16 +14,15 @@ from __future__ import annotations
 import base64
 import io
 import os
-import tempfile
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
 from . import _ndtrace
-from .composite import _array, composite, scene_options
-from .files import c_array
+from ._description import plain
+from ._util import c_array, float32_array, output_done, output_temp
+from .composite import composite, scene_options
 from .retina import Retina, trace
-from .scene import Scene, _plain
+from .scene import Scene
 
 __all__ = ["write_svg", "svg_text"]
 
@@ -69,8 +68,8 @@ def svg_text(scene_or_retina, *, fill: bool = True, threads: int | None = None, 
     hidden = opts.get("hidden_edges", "dashed")
     keys = {k: v for k, v in opts.items() if v is not None}
     rows = np.asarray(_ndtrace.picture_edges(
-        _array("retina.rgba", retina.rgba), _array("retina.depth", retina.depth), _plain(keys),
-        threads, _array("retina.normal", retina.normal), retina._camera_info(), retina._edges(angle)))
+        float32_array("retina.rgba", retina.rgba), float32_array("retina.depth", retina.depth), plain(keys),
+        threads, float32_array("retina.normal", retina.normal), retina._camera_info(), retina._edges(angle)))
     defaults = _ndtrace.composite_defaults()
     w, h = (int(v) for v in (opts.get("size") or defaults["size"]))
     width = float(opts.get("edge_width") or 0.0) or max(1.0, min(w, h) / 300.0)
@@ -103,7 +102,7 @@ def svg_text(scene_or_retina, *, fill: bool = True, threads: int | None = None, 
             style = (f'stroke-width="{HIDDEN_WIDTH * width:.3g}" stroke-opacity="{HIDDEN_OPACITY[hidden]}"'
                      + (f' stroke-dasharray="{DASH[0]} {DASH[1]}"' if hidden == "dashed" else ""))
             name = "hidden"
-        lines = [f'<g id={quoteattr(name + "-edges")} fill="none" stroke-linecap="round" {style}>']
+        lines = [f'<g id="{name}-edges" fill="none" stroke-linecap="round" {style}>']
         for x0, y0, x1, y1, _d0, _d1, r, g, b, _v in pieces:
             lines.append(f'<path d="M{x0:.2f} {y0:.2f}L{x1:.2f} {y1:.2f}" stroke="{_hex((r, g, b))}"/>')
         lines.append("</g>")
@@ -138,11 +137,11 @@ def write_svg(path: str | os.PathLike, scene, *, fill: bool = True, threads: int
     if not os.path.isdir(folder):
         raise OSError(f"{path}: cannot write: folder {folder} does not exist")
     text = svg_text(scene, fill=fill, threads=threads, **options)
-    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.tmp-", suffix=".svg", dir=folder)
+    tmp = output_temp(path, ".svg")
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
+        with open(tmp, "w", encoding="utf-8") as f:
             f.write(text)
-        os.replace(tmp, path)
+        output_done(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)

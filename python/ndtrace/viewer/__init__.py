@@ -17,20 +17,23 @@ The server needs ``pip install "ndtrace[view]"`` (aiohttp), the widget ``ndtrace
 
 from __future__ import annotations
 
+from .server import serve as _serve
 from .session import ViewSession
+from .widget import widget as _widget
 
 __all__ = ["ViewSession", "serve", "widget"]
 
 
+# The functions below are defined after the imports above on purpose: importing the submodule
+# ``widget`` binds the package's attribute ``widget`` to the module, and the ``def`` then binds it
+# to the function for good (a submodule is bound once, when it is first imported).
+
+
 def serve(scene, **kwargs) -> None:
     """Serves the viewer of ``scene`` until Ctrl-C: see :func:`ndtrace.viewer.server.serve`."""
-    from .server import serve as _serve
-
     _serve(scene, **kwargs)
 
 
 def widget(scene, **kwargs):
     """The viewer of ``scene`` as a Jupyter widget: see :func:`ndtrace.viewer.widget.widget`."""
-    from .widget import widget as _widget
-
     return _widget(scene, **kwargs)

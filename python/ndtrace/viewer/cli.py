@@ -16,7 +16,10 @@ import os
 import sys
 import traceback
 
-from .. import __version__
+from .._command import UsageError, apply_sets, capped_threads, ints, load_scene
+from .._ndtrace import __version__
+from .._optional import need
+from .server import serve
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -44,37 +47,30 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def run(argv: list[str]) -> int:
-    from ..cli import UsageError, _apply_sets, _ints, _load
-
     args = _parser().parse_args(argv)
     if not 0 <= args.port <= 65535:
         raise UsageError(f"--port: expected 0 (any free port) to 65535, got {args.port}")
-    if args.threads is not None and args.threads < 1:
-        raise UsageError(f"--threads: must be at least 1, got {args.threads}")
+    args.threads = capped_threads(args.threads, "ndtrace view")
     if args.draft_cells is not None and args.draft_cells < 1:
         raise UsageError(f"--draft-cells: must be at least 1, got {args.draft_cells}")
     size = None
     if args.size:
-        size = _ints(args.size.lower(), "--size", "x")
+        size = ints(args.size.lower(), "--size", "x")
         if len(size) != 2:
             raise UsageError(f"--size: expected WxH, got {args.size!r}")
     try:
-        import aiohttp  # noqa: F401
-    except ImportError:
-        raise UsageError('ndtrace view needs aiohttp: pip install "ndtrace[view]"') from None
-    scene = _load(args.scene)
-    scene = _apply_sets(scene, args.set, scene._base or os.path.dirname(os.path.abspath(args.scene)))
-    from .server import serve
-
+        need("aiohttp", extra="view", what="ndtrace view")
+    except ImportError as e:
+        raise UsageError(str(e)) from None
+    scene = load_scene(args.scene)
+    scene = apply_sets(scene, args.set, scene._base or os.path.dirname(os.path.abspath(args.scene)))
     serve(scene, port=args.port, open_browser=not args.no_browser, name=os.path.basename(args.scene),
-          size=tuple(size) if size else None, threads=args.threads, draft_cells=args.draft_cells)
+          size=(size[0], size[1]) if size else None, threads=args.threads, draft_cells=args.draft_cells)
     sys.stderr.write("ndtrace view: stopped\n")
     return 0
 
 
 def main(argv: list[str]) -> int:
-    from ..cli import UsageError
-
     try:
         return run(argv)
     except KeyboardInterrupt:

@@ -11,9 +11,11 @@ custom messages instead of the websocket) and the same :class:`ViewSession` and
 from __future__ import annotations
 
 from importlib import resources
+from typing import Any
 
 import numpy as np
 
+from .._optional import need
 from ..scene import Scene
 from .server import dispatch
 from .session import ViewSession
@@ -52,12 +54,10 @@ def widget_esm() -> str:
 
 
 def _widget_class():
-    try:
-        import anywidget
-    except ImportError:
-        raise ImportError('ndtrace.widget needs anywidget: pip install "ndtrace[notebook]"') from None
+    anywidget = need("anywidget", extra="notebook", what="ndtrace.widget")
+    base: Any = anywidget.AnyWidget  # imported here: an optional dependency
 
-    class ViewerWidget(anywidget.AnyWidget):
+    class ViewerWidget(base):
         """The ndtrace viewer of one scene in a notebook (see :func:`ndtrace.widget`)."""
 
         _esm = widget_esm()
@@ -75,9 +75,10 @@ def _widget_class():
         def _on_message(self, _widget, content, buffers) -> None:
             try:
                 reply, frame = self._session.handle(content)
-            except ValueError as e:
+            except (ValueError, TypeError, OverflowError, RecursionError, MemoryError) as e:
                 seq = content.get("seq") if isinstance(content, dict) else None
-                self.send({"type": "error", "seq": seq, "message": str(e)})
+                seq = seq if isinstance(seq, int) and not isinstance(seq, bool) else None
+                self.send({"type": "error", "seq": seq, "message": (str(e) or type(e).__name__).splitlines()[0]})
                 return
             if reply is not None:
                 self.send(reply)
@@ -114,7 +115,7 @@ def widget(scene: Scene, *, size: tuple[int, int] | None = None, threads: int | 
     global _CLASS
     if _CLASS is None:
         _CLASS = _widget_class()
-    kwargs = {"size": size, "threads": threads, "name": name or "scene"}
+    kwargs: dict[str, Any] = {"size": size, "threads": threads, "name": name or "scene"}
     if draft_cells is not None:
         kwargs["draft_cells"] = draft_cells
     return _CLASS(ViewSession(scene, **kwargs))

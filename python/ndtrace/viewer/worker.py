@@ -19,7 +19,8 @@ from __future__ import annotations
 import threading
 import time
 import traceback
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 __all__ = ["FrameWorker", "Superseded", "DRAFT", "FULL"]
 

@@ -4,7 +4,6 @@ Each file is tiny and asks for something the readers must refuse with the error 
 tests/test_hostile.py expects (listed in README.md beside them).
 """
 
-import io
 import os
 import struct
 

@@ -74,7 +74,8 @@ impl View3 {
             })
         };
         let sections = (opts.layout == ViewLayout::Sections).then(plain);
-        let illustrative = opts.mode == CompositeMode::Illustrative;
+        // Cubes draw the cells themselves, whatever the mode.
+        let illustrative = opts.mode == CompositeMode::Illustrative && opts.cubes.is_none();
         // The framing box: the occupied cells before any cutaway, so a cut does not move the
         // object in the picture.
         let mut frame = None;
@@ -211,6 +212,13 @@ impl View3 {
                 paste(&mut img, w, &right, wr, wl, 0, wr, h);
                 img
             }
+            ViewLayout::Slice => {
+                let wl = w / 2;
+                let left = self.view(&sized(wl, h, opts.azimuth));
+                let mut img = vec![0f32; w * h * 4];
+                paste(&mut img, w, &left, wl.max(1), 0, 0, wl, h);
+                img
+            }
             ViewLayout::Sections => {
                 let (wl, wr, ht, hb) = (w / 2, w - w / 2, h / 2, h - h / 2);
                 let mut img = vec![0f32; w * h * 4];
@@ -249,7 +257,12 @@ impl View3 {
                 &classified
             }
         };
-        let (mut img, half) = render_view(grid, &cam, self.mode, opts, bg, !self.edges.is_empty());
+        let (mut img, half) = match opts.cubes {
+            Some(c) => {
+                super::cubes::render_cubes(grid, &cam, opts, c.size, bg, !self.edges.is_empty())
+            }
+            None => render_view(grid, &cam, self.mode, opts, bg, !self.edges.is_empty()),
+        };
         if !self.edges.is_empty() {
             let pixels = project(&self.edges, &cam);
             overlay::draw(&mut img, opts.size.0, &pixels, half.as_deref(), opts);

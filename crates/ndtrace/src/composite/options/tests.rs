@@ -33,6 +33,9 @@ turntable = 12
 shape = "sphere"
 center = [0.0, 0.25, 0.0]
 radius = 0.5
+
+[cubes]
+size = 0.5
 "#;
 
 #[test]
@@ -69,6 +72,7 @@ fn every_key_sets_its_own_field_and_is_written_back() {
             center: [0.0, 0.25, 0.0],
             radius: 0.5,
         }),
+        cubes: Some(crate::composite::Cubes { size: 0.5 }),
         given: GivenKeys::ALL,
     };
     assert_eq!(o, expect);
