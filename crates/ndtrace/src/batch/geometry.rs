@@ -22,6 +22,7 @@ pub enum OnDegenerate {
 
 /// Runs `f(i, out_i)` for every item in parallel; a degenerate item is filled with NaN and,
 /// under [`OnDegenerate::Error`], the first one (by index) becomes the error.
+#[allow(clippy::type_complexity)]
 fn run_items(
     arg: &str,
     out: &mut [f64],
