@@ -25,7 +25,6 @@ type ItemFn<'a> = dyn Fn(usize, &mut [f64]) -> Result<(), Degenerate> + Sync + '
 
 /// Runs `f(i, out_i)` for every item in parallel; a degenerate item is filled with NaN and,
 /// under [`OnDegenerate::Error`], the first one (by index) becomes the error.
-#[allow(clippy::type_complexity)]
 fn run_items(
     arg: &str,
     out: &mut [f64],
