@@ -169,14 +169,24 @@ fn pinhole_groups_agree_with_brute_force<const N: usize>() {
     let (mut hits, mut misses) = (0, 0);
     for case in 0..300 {
         let origin = scale(&random_unit::<N>(&mut r), 9.0);
-        // Directions around one toward a point near the cluster (often off it), in a narrow
-        // cone: four packets of one origin and one octant.
-        let aim = random_vector::<N>(&mut r, [1.0, 4.0][case % 2]);
+        // Even cases: directions in a narrow cone around one through the centroid of one of
+        // the cluster's simplices (hits in every dimension, though the cluster is sparse in 8);
+        // odd cases: a wider cone toward a point near the cluster, often off it (misses even in
+        // 2, where the cluster is dense). Four packets of one origin and one octant each.
+        let (aim, spread) = if case % 2 == 0 {
+            let (pts, _) = &s[r.random_range(0..s.len())];
+            let centre = pts
+                .iter()
+                .fold([0.0; N], |c, p| add(&c, &scale(p, 1.0 / N as f64)));
+            (add(&centre, &random_vector::<N>(&mut r, 0.05)), 0.05)
+        } else {
+            (random_vector::<N>(&mut r, 4.0), 0.3)
+        };
         let axis = crate::linalg::sub(&aim, &origin);
         let rays: Vec<Ray<N>> = (0..4 * PACKET)
             .map(|_| Ray {
                 origin,
-                dir: add(&axis, &random_vector::<N>(&mut r, 0.3)),
+                dir: add(&axis, &random_vector::<N>(&mut r, spread)),
             })
             .collect();
         let want: Vec<_> = rays
