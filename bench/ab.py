@@ -5,10 +5,10 @@ Each build is a Python interpreter that imports its own ndtrace (a venv, or ``py
 ``../shared/bench/`` (tesseract48, s3_3072, elev_3072: shaded, one directional light with
 shadows, two-sided, at a 128³ retina; ``--res`` changes it) and each thread count, the builds
 run in alternating rounds (A B B A A B …); a round loads the scene once and takes the minimum of
-3 traces. Prints the median of the rounds' minimums for each build, and B's speed over A's
-(above 1: B is faster).
+3 traces. Prints the median of the rounds' minimums for each build, and B's (and C's) speed over A's
+(above 1: faster than A).
 
-Usage:  python bench/ab.py --a PYTHON_A --b PYTHON_B [--rounds 6] [--res 128] [--threads 1 2]
+Usage:  python bench/ab.py --a PYTHON_A --b PYTHON_B [--c PYTHON_C] [--rounds 6] [--res 128] [--threads 1 2]
                            [--only tesseract48 ...]
 """
 
@@ -55,23 +55,30 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--a", required=True, help="the interpreter of build A (the base)")
     ap.add_argument("--b", required=True, help="the interpreter of build B (the change)")
+    ap.add_argument("--c", help="the interpreter of a third build C (optional, e.g. an older base)")
     ap.add_argument("--rounds", type=int, default=6)
     ap.add_argument("--res", type=int, default=128)
     ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--only", nargs="*")
     a = ap.parse_args()
-    print(f"{'scene':<12} {'threads':>7} {'A s (median)':>13} {'B s (median)':>13} {'B speed / A':>12}")
+    builds = [("A", a.a), ("B", a.b)] + ([("C", a.c)] if a.c else [])
+    names = [n for n, _ in builds]
+    head = "".join(f" {n + ' s (median)':>13}" for n in names)
+    ratios = "".join(f" {n + ' speed / A':>12}" for n in names[1:])
+    print(f"{'scene':<12} {'threads':>7}{head}{ratios}")
     for scene in a.only or SCENES:
-        times: dict = {("a", k): [] for k in a.threads} | {("b", k): [] for k in a.threads}
+        times: dict = {(n, k): [] for n in names for k in a.threads}
         for r in range(a.rounds):
-            order = ("a", "b") if r % 2 == 0 else ("b", "a")
-            for which in order:
-                for k, t in one_round(getattr(a, which), scene, a.res, a.threads).items():
-                    times[(which, k)].append(t)
+            # Alternating rounds: A B (C), then the reverse order, and so on.
+            order = builds if r % 2 == 0 else builds[::-1]
+            for name, python in order:
+                for k, t in one_round(python, scene, a.res, a.threads).items():
+                    times[(name, k)].append(t)
         for k in a.threads:
-            ta, tb = statistics.median(times[("a", k)]), statistics.median(times[("b", k)])
-            print(f"{scene:<12} {k:>7} {ta:>13.4f} {tb:>13.4f} {ta / tb:>12.3f}", flush=True)
-
+            med = [statistics.median(times[(n, k)]) for n in names]
+            cols = "".join(f" {t:>13.4f}" for t in med)
+            speed = "".join(f" {med[0] / t:>12.3f}" for t in med[1:])
+            print(f"{scene:<12} {k:>7}{cols}{speed}", flush=True)
 
 if __name__ == "__main__":
     sys.exit(main())

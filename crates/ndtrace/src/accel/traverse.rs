@@ -3,7 +3,7 @@
 
 use super::build::MAX_SAH_DEPTH;
 use super::cell::{Cell, Pick};
-use super::kernels::{leaf_slots, prefetch_block, slabs, within};
+use super::kernels::{frustum_slabs, leaf_slots, prefetch_block, slabs, within};
 use super::packet::{Packet, PACKET};
 use super::simplex::PreparedRay;
 use super::stats;
@@ -293,7 +293,7 @@ impl<const N: usize> Bvh<N> {
     #[allow(clippy::too_many_arguments)]
     fn descend<const AVX: bool, const P: usize, const NEAREST_FIRST: bool>(
         &self,
-        packet: &Packet<N, P>,
+        (packet, originals): (&mut Packet<N, P>, &[Ray<N>]),
         cur: u32,
         rays: u32,
         lo: f32,
@@ -304,13 +304,36 @@ impl<const N: usize> Bvh<N> {
     ) -> (u32, u32) {
         let nd = &self.nodes[cur as usize];
         stats::count(0);
-        // Byte q of `met`: the children ray q meets; `tn`: the smallest entry per child.
-        let (met, tn) = slabs::<N, AVX, P>(packet, nd, rays, lo, limit);
-        let mut any = met;
-        any |= any >> 32;
-        any |= any >> 16;
-        any |= any >> 8;
-        let mut mask = (any & 0xff) as u32;
+        // The slots holding leaves (or nothing), those holding nothing, and the flat cells.
+        let (leafy, empty) = leaf_slots::<AVX>(&nd.child);
+        // A coherent packet's frustum first: the children no ray can meet, and when it meets
+        // only inner nodes, which of them every ray of `rays` goes on to (the rays' own tests
+        // are left to the nodes whose leaves the frustum meets).
+        let mut shared = None;
+        if let Some(f) = &packet.frustum {
+            let (m, t) = frustum_slabs::<N, AVX, P>(f, nd, lo, limit);
+            if m == 0 {
+                return (EMPTY_SLOT, 0);
+            }
+            if m & leafy == 0 {
+                shared = Some((m, t));
+            }
+        }
+        // Byte l of `by_child`: the rays that meet child l; `tn`: the smallest entry per child
+        // (for a frustum, a lower bound of its rays').
+        let (by_child, tn, mut mask) = match shared {
+            Some((m, t)) => (spread(m) * u64::from(rays), t, m),
+            None => {
+                packet.prepare(originals, self.reach);
+                // Byte q of `met`: the children ray q meets.
+                let (met, tn) = slabs::<N, AVX, P>(packet, nd, rays, lo, limit);
+                let mut any = met;
+                any |= any >> 32;
+                any |= any >> 16;
+                any |= any >> 8;
+                (transpose8(met), tn, (any & 0xff) as u32)
+            }
+        };
         if !NEAREST_FIRST && !skip.is_empty() {
             let r = &self.ranges[cur as usize];
             for l in 0..NODE_WIDTH {
@@ -321,8 +344,6 @@ impl<const N: usize> Bvh<N> {
         if mask == 0 {
             return (EMPTY_SLOT, 0);
         }
-        // The slots holding leaves (or nothing), those holding nothing, and the flat cells.
-        let (leafy, empty) = leaf_slots::<AVX>(&nd.child);
         let cells = if self.cells.is_empty() {
             0
         } else {
@@ -337,8 +358,6 @@ impl<const N: usize> Bvh<N> {
                 prefetch_block(self.block_ptr(nd.child[l]), LeafBlock::<N>::HEAD);
             }
         }
-        // Byte l of `by_child`: the rays that meet child l.
-        let by_child = transpose8(met);
         let rays_of = |l: usize| ((by_child >> (8 * l)) & 0xff) as u32;
         if mask & (mask - 1) == 0 {
             let l = mask.trailing_zeros() as usize;
@@ -430,13 +449,14 @@ impl<const N: usize> Bvh<N> {
             out.fill(None);
             return;
         }
-        let mut slot = MaybeUninit::uninit();
-        let packet = Packet::<N, P>::init(&mut slot, rays, self.reach);
         // Boxes are culled against [tmin, best] widened (T_PAD, then outward to f32); simplices
         // use the exact open interval.
         let lo = f32_down(pad_down(tmin));
+        let hi = f32_up(pad_up(tmax));
+        let mut slot = MaybeUninit::uninit();
+        let packet = Packet::<N, P>::init(&mut slot, rays, self.reach);
         let mut limit = [f32::NEG_INFINITY; P];
-        limit[..k].fill(f32_up(pad_up(tmax)));
+        limit[..k].fill(hi);
         let mut best = [BestHit {
             t: tmax,
             id: u32::MAX,
@@ -454,7 +474,7 @@ impl<const N: usize> Bvh<N> {
             // Descend through inner nodes, nearest child first.
             while cur & LEAF_TAG == 0 {
                 (cur, cur_rays) = self.descend::<AVX, P, true>(
-                    packet,
+                    (&mut *packet, rays),
                     cur,
                     cur_rays,
                     lo,
@@ -470,7 +490,7 @@ impl<const N: usize> Bvh<N> {
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
                     left &= left - 1;
-                    let ray = &packet.pre[q].prepared;
+                    let ray = &packet.pre()[q].prepared;
                     let mut test = |b: u32| {
                         let block = &self.blocks[b as usize];
                         let hits = self.block_hit::<AVX>(block, ray, tmin, tmax_b[q]);
@@ -573,7 +593,14 @@ impl<const N: usize> Bvh<N> {
         while alive != 0 {
             while cur & LEAF_TAG == 0 {
                 (cur, cur_rays) = self.descend::<AVX, P, false>(
-                    packet, cur, cur_rays, lo, &limit, skip, &mut stack, &mut sp,
+                    (&mut *packet, rays),
+                    cur,
+                    cur_rays,
+                    lo,
+                    &limit,
+                    skip,
+                    &mut stack,
+                    &mut sp,
                 );
             }
             if cur != EMPTY_SLOT {
@@ -582,7 +609,7 @@ impl<const N: usize> Bvh<N> {
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
                     left &= left - 1;
-                    let ray = &packet.pre[q].prepared;
+                    let ray = &packet.pre()[q].prepared;
                     let mut hit = false;
                     self.leaf_blocks(cur, ray, &mut |b: u32| {
                         if hit {
@@ -590,18 +617,31 @@ impl<const N: usize> Bvh<N> {
                         }
                         let block = &self.blocks[b as usize];
                         let hits = self.block_hit::<AVX>(block, ray, tmin, tmax[q]);
-                        let mut mask = hits.mask | hits.unsure;
+                        let counts = |l: usize| {
+                            let id = block.ids[l];
+                            accept(id) && !skip.contains(&id)
+                        };
+                        // The lanes the rounded rows decide first: the exact tests of the
+                        // unsure ones (a shadow ray leaving a simplex is often unsure of its
+                        // neighbours, which it leaves at t ≈ 0) only when none of them counts.
+                        let mut mask = hits.mask;
                         while mask != 0 {
                             let l = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
-                            let id = block.ids[l];
-                            if accept(id)
-                                && !skip.contains(&id)
-                                && (hits.unsure & (1 << l) == 0
-                                    || self.exact_hit(id, ray, tmin, tmax[q]).is_some())
+                            if counts(l) {
+                                hit = true;
+                                return;
+                            }
+                        }
+                        let mut mask = hits.unsure;
+                        while mask != 0 {
+                            let l = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            if counts(l)
+                                && self.exact_hit(block.ids[l], ray, tmin, tmax[q]).is_some()
                             {
                                 hit = true;
-                                break;
+                                return;
                             }
                         }
                     });
@@ -636,6 +676,15 @@ struct StackEntry {
     node: u32,
     rays: u32,
     t: f32,
+}
+
+/// The bits of `m` (< 256) spread to the bytes of the result: byte l is 1 when bit l is set.
+#[inline(always)]
+fn spread(m: u32) -> u64 {
+    // Bits 0–6: the product holds 8 copies of them 7 bits apart (disjoint, so no carries),
+    // copy l putting bit l at bit 8l; bit 7 goes to bit 56 apart.
+    let m = u64::from(m);
+    (((m & 0x7f) * 0x0002_0408_1020_4081) | (m >> 7 & 1) << 56) & 0x0101_0101_0101_0101
 }
 
 /// Transposes the 8×8 bit matrix whose row r is byte r of `x` (bit c of the byte is column c):

@@ -92,14 +92,15 @@ struct ShadowRay<const N: usize> {
 }
 
 impl<const N: usize> GroupTracer<N> {
-    /// Traces `self.rays` and shades their hits into `self.color` and `self.nearest`.
+    /// Traces `self.rays` and shades their hits into `self.color` and `self.nearest`; `false`
+    /// (and neither is written) when every ray misses.
     pub(super) fn trace_and_shade(
         &mut self,
         scene: &Scene<N>,
         accept: &(impl Fn(u32) -> bool + Sync),
         shading: &[ObjectShading],
         depth_range: (f64, f64),
-    ) {
+    ) -> bool {
         let cam = &scene.camera;
         // 1. Nearest hits, sized to the rays (no clearing: `closest_hits` writes every element).
         self.hits.resize(self.rays.len(), None);
@@ -108,6 +109,9 @@ impl<const N: usize> GroupTracer<N> {
             .closest_hits(&self.rays, 0.0, f64::INFINITY, accept, &mut self.hits);
         if scene.clips.active() {
             super::clip::clip_hits(scene, &self.rays, accept, &mut self.hits);
+        }
+        if self.hits.iter().all(Option::is_none) {
+            return false;
         }
         self.color.clear();
         self.nearest.clear();
@@ -243,6 +247,7 @@ impl<const N: usize> GroupTracer<N> {
                 c[k] += color[k];
             }
         }
+        true
     }
 }
 

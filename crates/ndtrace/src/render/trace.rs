@@ -197,7 +197,19 @@ where
                         }
                     }
                     // 3. Their nearest hits and colours.
-                    group_tracer.trace_and_shade(scene, &accept, &shading, depth_range);
+                    let any = group_tracer.trace_and_shade(scene, &accept, &shading, depth_range);
+                    if !any {
+                        // Every ray missed: each cell holds the value of a miss (`cell_value`).
+                        for s in slots {
+                            let c = cell_of(s);
+                            rgba[c * 4..c * 4 + 4].fill(0.0);
+                            depth[c] = NearestHit::<N>::MISS.depth as f32;
+                            normal[c * N..(c + 1) * N].fill(0.0);
+                            object_id[c] = NearestHit::<N>::MISS.object;
+                            primitive_id[c] = NearestHit::<N>::MISS.primitive;
+                        }
+                        continue;
+                    }
                     // 4. Each cell's value from its rays, into the retina.
                     for (j, s) in slots.enumerate() {
                         let c = cell_of(s);

@@ -9,7 +9,7 @@ pub(in crate::accel) mod portable;
 #[cfg(target_arch = "x86_64")]
 pub(in crate::accel) mod x86_64;
 
-use super::packet::{Packet, TraversalRay};
+use super::packet::{Frustum, Packet, TraversalRay};
 use super::simplex::PreparedRay;
 use super::stats;
 use super::tree::{BlockHits, LeafBlock, WideNode, NODE_WIDTH};
@@ -58,7 +58,7 @@ pub(in crate::accel) fn slabs<const N: usize, const AVX: bool, const P: usize>(
         // SAFETY: `AVX` is only true in code running after an AVX2 check.
         return unsafe { x86_64::slabs_avx2(packet, node, rays, lo, limit) };
     }
-    let pre = &packet.pre;
+    let pre = packet.pre();
     let mut met = 0u64;
     let mut tn = [f32::INFINITY; NODE_WIDTH];
     let mut left = rays;
@@ -74,6 +74,30 @@ pub(in crate::accel) fn slabs<const N: usize, const AVX: bool, const P: usize>(
         }
     }
     (met, tn)
+}
+
+/// The frustum test of a coherent packet against the children of `node` (see [`Frustum`]): the
+/// bit set of the children some ray of the packet may meet within `[lo, limit[q]]`, and a lower
+/// bound of their entry parameters (+∞ for the children no ray meets). Every child a ray's own
+/// slab test meets is in the set.
+#[inline(always)]
+pub(in crate::accel) fn frustum_slabs<const N: usize, const AVX: bool, const P: usize>(
+    frustum: &Frustum<N>,
+    node: &WideNode<N>,
+    lo: f32,
+    limit: &[f32; P],
+) -> (u32, [f32; NODE_WIDTH]) {
+    // The packet's reach: the largest of its rays' (never NaN).
+    let mut hi = f32::NEG_INFINITY;
+    for &l in limit {
+        hi = if l > hi { l } else { hi };
+    }
+    #[cfg(target_arch = "x86_64")]
+    if AVX && NODE_WIDTH == 8 {
+        // SAFETY: `AVX` is only true in code running after an AVX2 check.
+        return unsafe { x86_64::frustum_slabs_avx2(frustum, node, lo, hi) };
+    }
+    frustum.slabs_portable(node, lo, hi)
 }
 
 /// Prefetches the first `bytes` (1 ≤ bytes ≤ its size) bytes of a block: [`LeafBlock::HEAD`] (what

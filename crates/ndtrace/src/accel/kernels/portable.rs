@@ -1,7 +1,7 @@
 //! The portable kernels: the reference the x86_64 kernels are tested against bit for bit, and the
 //! kernels of other targets. Compiled on every target.
 
-use super::super::packet::TraversalRay;
+use super::super::packet::{Frustum, TraversalRay};
 use super::super::simplex::PreparedRay;
 use super::super::tree::{
     BlockHits, LeafBlock, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
@@ -26,6 +26,46 @@ impl<const N: usize> TraversalRay<N> {
             for l in 0..NODE_WIDTH {
                 let a = (bn[l] - self.o_near[i]) * self.inv[i];
                 let c = (bf[l] - self.o_far[i]) * self.inv[i];
+                tn[l] = if a > tn[l] { a } else { tn[l] };
+                tf[l] = if c < tf[l] { c } else { tf[l] };
+            }
+        }
+        let mut mask = 0;
+        for l in 0..NODE_WIDTH {
+            let met = tn[l] <= tf[l];
+            mask |= (met as u32) << l;
+            if !met {
+                tn[l] = f32::INFINITY;
+            }
+        }
+        (mask, tn)
+    }
+}
+
+impl<const N: usize> Frustum<N> {
+    /// Portable version of the x86_64 frustum test `frustum_slabs_avx2` (same arithmetic, same
+    /// results): per child, the packet's smallest entry and largest exit parameter on each
+    /// axis (the products of `b − o'` with the ends of its range of `1/d`), against
+    /// `[lo, hi]`.
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    #[inline(always)]
+    pub(in crate::accel) fn slabs_portable(
+        &self,
+        node: &WideNode<N>,
+        lo: f32,
+        hi: f32,
+    ) -> (u32, [f32; NODE_WIDTH]) {
+        let mut tn = [lo; NODE_WIDTH];
+        let mut tf = [hi; NODE_WIDTH];
+        for i in 0..N {
+            let s = self.near[i] & 1;
+            let (bn, bf) = (&node.bounds[s][i], &node.bounds[s ^ 1][i]);
+            for l in 0..NODE_WIDTH {
+                let (x, y) = (bn[l] - self.o_near[i], bf[l] - self.o_far[i]);
+                let (a0, a1) = (x * self.inv_min[i], x * self.inv_max[i]);
+                let (c0, c1) = (y * self.inv_min[i], y * self.inv_max[i]);
+                let a = if a0 < a1 { a0 } else { a1 };
+                let c = if c0 > c1 { c0 } else { c1 };
                 tn[l] = if a > tn[l] { a } else { tn[l] };
                 tf[l] = if c < tf[l] { c } else { tf[l] };
             }

@@ -5,9 +5,11 @@
 //! slots, partly filled blocks).
 
 use super::*;
+use crate::accel::kernels::frustum_slabs;
 use crate::accel::kernels::portable;
 #[cfg(target_arch = "x86_64")]
 use crate::accel::kernels::x86_64::{leaf_slots_avx2, slabs_avx2, within8};
+use crate::accel::packet::Frustum;
 use crate::accel::tests::*;
 
 #[test]
@@ -51,11 +53,7 @@ fn accel_slab_test_treats_boxes_as_closed() {
                 (Some(pre.near), false),
                 (Some(pre.near), true),
             ] {
-                let packet = Packet::<3, 1> {
-                    pre: [pre],
-                    octant,
-                    shared_origin,
-                };
+                let packet = Packet::<3, 1>::of_prepared([pre], octant, shared_origin);
                 let (m2, t2) = unsafe { slabs_avx2(&packet, &node, 1, 0.0, &[f32::INFINITY]) };
                 assert_eq!(
                     (mask as u64, tn.map(f32::to_bits)),
@@ -306,11 +304,11 @@ fn slab_kernels_agree<const N: usize>() {
                     continue;
                 }
                 modes[mode] += 1;
-                let packet = Packet::<N, PACKET> {
+                let packet = Packet::<N, PACKET>::of_prepared(
                     pre,
-                    octant: (mode > 0).then_some(rays[0].near),
-                    shared_origin: mode == 2,
-                };
+                    (mode > 0).then_some(rays[0].near),
+                    mode == 2,
+                );
                 // SAFETY: AVX2 is available.
                 let (m, t) = unsafe { slabs_avx2(&packet, &node, (1 << count) - 1, lo, &limit) };
                 assert_eq!(m, want_met, "N={N} case {case}: AVX2 masks, mode {mode}");
@@ -476,4 +474,108 @@ fn accel_leaf_slot_and_within_kernels_match_the_portable_ones() {
             assert_eq!(unsafe { within8(t, limit.as_ptr()) }, want);
         }
     }
+}
+
+/// The frustum of a coherent packet (`Frustum`) against the slab test of each of its rays: it
+/// meets every child box a ray meets, with an entry no later than the ray's (in every dimension,
+/// with tiny direction components, infinite and empty bounds, origins on slab planes); it
+/// culls most children no ray meets; the AVX2 kernel gives the portable one's bits; and packets
+/// without one origin, one octant, or with a zero, NaN or infinite component have no frustum.
+fn frustum_is_conservative<const N: usize>() {
+    let mut r = rng(6900 + N as u64);
+    let (mut culled, mut met_by_none, mut refused) = (0, 0, 0);
+    for case in 0..4000 {
+        let node = random_node::<N>(&mut r);
+        let lo = [0.0, -0.0, f32::NEG_INFINITY, -1.5, 0.7][r.random_range(0..5)];
+        let limit: [f32; PACKET] =
+            std::array::from_fn(|_| [f32::INFINITY, 2.5, 0.3, 0.0, -1.0][r.random_range(0..5)]);
+        let count = r.random_range(1..=PACKET);
+        let scale = [1.0, 3.0][r.random_range(0..2)];
+        let origin: Vector<N> = std::array::from_fn(|_| coordinate(&mut r) as f64 * scale);
+        // Nonzero components (a zero has no frustum), some tiny.
+        let dir0: Vector<N> = std::array::from_fn(|_| {
+            let d = r.random_range(0.05..1.0) * [1.0, -1.0][r.random_range(0..2)];
+            if r.random_bool(0.1) {
+                d * 1e-30
+            } else {
+                d
+            }
+        });
+        let spread = [0.0, 1e-3, 0.05, 0.5][r.random_range(0..4)];
+        let mut rays: Vec<Ray<N>> = (0..count)
+            .map(|_| Ray {
+                origin,
+                dir: std::array::from_fn(|i| dir0[i] * (1.0 + spread * r.random_range(-0.9..1.0))),
+            })
+            .collect();
+        let reach = 3.0 * scale;
+        let f = Frustum::of(&rays, reach).expect("a coherent packet has a frustum");
+        let hi = limit.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let (mask, tn) = f.slabs_portable(&node, lo, hi);
+        #[cfg(target_arch = "x86_64")]
+        if avx2() {
+            let (m2, t2) = frustum_slabs::<N, true, PACKET>(&f, &node, lo, &limit);
+            assert_eq!(
+                (m2, t2.map(f32::to_bits)),
+                (mask, tn.map(f32::to_bits)),
+                "N={N} case {case}"
+            );
+        }
+        assert_eq!(
+            frustum_slabs::<N, false, PACKET>(&f, &node, lo, &limit),
+            (mask, tn)
+        );
+        let mut met_any = 0;
+        for (q, ray) in rays.iter().enumerate() {
+            let pre = TraversalRay::new(ray, reach);
+            assert_eq!(
+                (pre.near, pre.o_near, pre.o_far),
+                (f.near, f.o_near, f.o_far)
+            );
+            let (m, t) = pre.slab_portable(&node, lo, limit[q]);
+            assert_eq!(
+                m & !mask,
+                0,
+                "N={N} case {case}: a box a ray meets is culled"
+            );
+            for l in 0..NODE_WIDTH {
+                assert!(
+                    m >> l & 1 == 0 || tn[l] <= t[l],
+                    "N={N} case {case}: a later entry"
+                );
+            }
+            met_any |= m;
+        }
+        // Children no ray meets, and those of them the frustum culls.
+        met_by_none += (!met_any & 0xff).count_ones() as usize;
+        culled += (!mask & !met_any & 0xff).count_ones() as usize;
+        // One ray from elsewhere, of another octant, or with a zero, NaN or infinite component:
+        // no frustum.
+        if count > 1 {
+            let q = r.random_range(1..count);
+            let i = r.random_range(0..N);
+            match r.random_range(0..5) {
+                0 => rays[q].origin[i] += 0.25,
+                1 => rays[q].dir[i] = -rays[q].dir[i],
+                2 => rays[q].dir[i] = [0.0, -0.0][r.random_range(0..2)],
+                3 => rays[q].dir[i] = f64::NAN,
+                _ => rays[q].dir[i] = f64::INFINITY,
+            }
+            let same_signs =
+                rays[q].dir.map(f64::is_sign_negative) == dir0.map(f64::is_sign_negative);
+            if rays[q].origin != origin || !same_signs || !rays[q].dir[i].is_normal() {
+                refused += 1;
+                assert!(Frustum::of(&rays, reach).is_none(), "N={N} case {case}");
+            }
+        }
+    }
+    assert!(
+        culled * 10 > met_by_none * 7 && refused > 2000,
+        "N={N}: {culled} children culled of {met_by_none} that no ray meets, {refused} refused"
+    );
+}
+
+#[test]
+fn accel_frustum_meets_every_box_its_rays_meet() {
+    for_each_dim!(frustum_is_conservative);
 }

@@ -3,7 +3,7 @@
 //! exactly the arithmetic of its portable twin in `portable.rs` (the same operations in the same
 //! order, no FMA), which the tests check bit for bit.
 
-use super::super::packet::{Packet, TraversalRay};
+use super::super::packet::{Frustum, Packet, TraversalRay};
 use super::super::simplex::{PreparedRay, F64_ROUNDING, ROUNDING};
 use super::super::stats;
 use super::super::tree::{BlockHits, LeafBlock, WideNode, BLOCK_WIDTH, NODE_WIDTH};
@@ -252,6 +252,7 @@ pub(in crate::accel) unsafe fn slabs_avx2<const N: usize, const P: usize>(
     // SAFETY (all the intrinsics below): the caller guarantees AVX2; every pointer loaded or
     // stored is a `[f32; NODE_WIDTH]` (unaligned accesses).
     unsafe {
+        let pre = packet.pre();
         let mut tn = _mm256_set1_ps(f32::INFINITY);
         let mut met = 0u64;
         let mut left = rays;
@@ -265,36 +266,81 @@ pub(in crate::accel) unsafe fn slabs_avx2<const N: usize, const P: usize>(
             if packet.shared_origin {
                 // One origin (a pinhole camera's rays): the differences are the same for every
                 // ray.
-                slab_planes(&packet.pre[0], &bn, &bf, &mut dn, &mut df);
+                slab_planes(&pre[0], &bn, &bf, &mut dn, &mut df);
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
                     left &= left - 1;
-                    slab_ray(&packet.pre[q], q, &dn, &df, lo, limit[q], &mut met, &mut tn);
+                    slab_ray(&pre[q], q, &dn, &df, lo, limit[q], &mut met, &mut tn);
                 }
             } else {
                 while left != 0 {
                     let q = left.trailing_zeros() as usize;
                     left &= left - 1;
-                    slab_planes(&packet.pre[q], &bn, &bf, &mut dn, &mut df);
-                    slab_ray(&packet.pre[q], q, &dn, &df, lo, limit[q], &mut met, &mut tn);
+                    slab_planes(&pre[q], &bn, &bf, &mut dn, &mut df);
+                    slab_ray(&pre[q], q, &dn, &df, lo, limit[q], &mut met, &mut tn);
                 }
             }
         } else {
             while left != 0 {
                 let q = left.trailing_zeros() as usize;
                 left &= left - 1;
-                let side = &packet.pre[q].near;
+                let side = &pre[q].near;
                 for i in 0..N {
                     bn[i] = _mm256_loadu_ps(node.bounds[side[i] & 1][i].as_ptr());
                     bf[i] = _mm256_loadu_ps(node.bounds[(side[i] & 1) ^ 1][i].as_ptr());
                 }
-                slab_planes(&packet.pre[q], &bn, &bf, &mut dn, &mut df);
-                slab_ray(&packet.pre[q], q, &dn, &df, lo, limit[q], &mut met, &mut tn);
+                slab_planes(&pre[q], &bn, &bf, &mut dn, &mut df);
+                slab_ray(&pre[q], q, &dn, &df, lo, limit[q], &mut met, &mut tn);
             }
         }
         let mut out = [0.0f32; NODE_WIDTH];
         _mm256_storeu_ps(out.as_mut_ptr(), tn);
         (met, out)
+    }
+}
+
+/// The frustum test of a coherent packet against the children of `node` in AVX2 registers:
+/// [`Frustum::slabs_portable`] with the 8 children in the lanes (the same operations: min/max
+/// pick as the portable comparisons do, and no NaN occurs). Always inlined, as
+/// [`slabs_avx2`].
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[inline(always)]
+pub(in crate::accel) unsafe fn frustum_slabs_avx2<const N: usize>(
+    f: &Frustum<N>,
+    node: &WideNode<N>,
+    lo: f32,
+    hi: f32,
+) -> (u32, [f32; NODE_WIDTH]) {
+    // SAFETY (all the intrinsics below): the caller guarantees AVX2; every pointer loaded or
+    // stored is a `[f32; NODE_WIDTH]` (unaligned accesses).
+    unsafe {
+        let mut near = _mm256_set1_ps(lo);
+        let mut far = _mm256_set1_ps(hi);
+        for i in 0..N {
+            let s = f.near[i] & 1;
+            let x = _mm256_sub_ps(
+                _mm256_loadu_ps(node.bounds[s][i].as_ptr()),
+                _mm256_set1_ps(f.o_near[i]),
+            );
+            let y = _mm256_sub_ps(
+                _mm256_loadu_ps(node.bounds[s ^ 1][i].as_ptr()),
+                _mm256_set1_ps(f.o_far[i]),
+            );
+            let (i0, i1) = (_mm256_set1_ps(f.inv_min[i]), _mm256_set1_ps(f.inv_max[i]));
+            // minps/maxps return their second operand unless the first is smaller/larger: the
+            // portable comparisons' picks.
+            let a = _mm256_min_ps(_mm256_mul_ps(x, i0), _mm256_mul_ps(x, i1));
+            let c = _mm256_max_ps(_mm256_mul_ps(y, i0), _mm256_mul_ps(y, i1));
+            near = _mm256_max_ps(a, near);
+            far = _mm256_min_ps(c, far);
+        }
+        let met = _mm256_cmp_ps::<_CMP_LE_OQ>(near, far);
+        let t = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), near, met);
+        let mut out = [0.0f32; NODE_WIDTH];
+        _mm256_storeu_ps(out.as_mut_ptr(), t);
+        (_mm256_movemask_ps(met) as u32, out)
     }
 }
 

@@ -157,6 +157,65 @@ fn accel_packets_equal_brute_force_ray_by_ray() {
     for_each_dim!(packets_agree_with_brute_force);
 }
 
+/// A pinhole's rays in groups of four packets over a cluster of simplices, from outside its
+/// box: packets whose frustum leaves the tree before its leaves are done without their rays'
+/// own tests, those along the cluster's silhouette are traced, and every ray's closest hit is
+/// brute force's, on the AVX2 and portable paths.
+fn pinhole_groups_agree_with_brute_force<const N: usize>() {
+    let mut r = rng(2700 + N as u64);
+    let s = soup::<N>(&mut r, 200);
+    let prims = prepare(&s);
+    let bvh = build_soup(&s, PAR_MIN);
+    let (mut hits, mut misses) = (0, 0);
+    for case in 0..300 {
+        let origin = scale(&random_unit::<N>(&mut r), 9.0);
+        // Even cases: directions in a narrow cone around one through the centroid of one of
+        // the cluster's simplices (hits in every dimension, though the cluster is sparse in 8);
+        // odd cases: a wider cone toward a point near the cluster, often off it (misses even in
+        // 2, where the cluster is dense). Four packets of one origin and one octant each.
+        let (aim, spread) = if case % 2 == 0 {
+            let (pts, _) = &s[r.random_range(0..s.len())];
+            let centre = pts
+                .iter()
+                .fold([0.0; N], |c, p| add(&c, &scale(p, 1.0 / N as f64)));
+            (add(&centre, &random_vector::<N>(&mut r, 0.05)), 0.05)
+        } else {
+            (random_vector::<N>(&mut r, 4.0), 0.3)
+        };
+        let axis = crate::linalg::sub(&aim, &origin);
+        let rays: Vec<Ray<N>> = (0..4 * PACKET)
+            .map(|_| Ray {
+                origin,
+                dir: add(&axis, &random_vector::<N>(&mut r, spread)),
+            })
+            .collect();
+        let want: Vec<_> = rays
+            .iter()
+            .map(|ray| brute(&prims, ray, 0.0, f64::INFINITY, |_| true))
+            .collect();
+        let mut got = vec![None; rays.len()];
+        bvh.closest_hits(&rays, 0.0, f64::INFINITY, |_| true, &mut got);
+        assert_eq!(got, want, "N={N} case {case}");
+        let mut portable = vec![None; rays.len()];
+        for (rs, out) in rays.chunks(PACKET).zip(portable.chunks_mut(PACKET)) {
+            bvh.closest_hits_impl::<false, PACKET>(rs, 0.0, f64::INFINITY, &|_| true, out);
+        }
+        assert_eq!(portable, want, "N={N} case {case}: portable path");
+        let h = want.iter().filter(|h| h.is_some()).count();
+        hits += h;
+        misses += want.len() - h;
+    }
+    assert!(
+        hits > 150 && misses > 150,
+        "N={N}: {hits} hits, {misses} misses"
+    );
+}
+
+#[test]
+fn accel_pinhole_groups_equal_brute_force() {
+    for_each_dim!(pinhole_groups_agree_with_brute_force);
+}
+
 /// Two clusters of simplices with ids 0..150 and 150..300: the id range of every child slot
 /// is the min/max over its subtree, whole subtrees of one cluster can be skipped, and
 /// any-hit queries that skip ids agree with brute force over the ids they keep.
@@ -271,6 +330,14 @@ fn accel_transpose8_transposes_the_bit_matrix() {
             }
         }
         assert_eq!(transpose8(x), want);
+    }
+}
+
+#[test]
+fn accel_spread_moves_bit_l_to_byte_l() {
+    for m in 0..256u32 {
+        let want = (0..8).fold(0u64, |w, l| w | u64::from(m >> l & 1) << (8 * l));
+        assert_eq!(spread(m), want, "{m:#010b}");
     }
 }
 
