@@ -43,6 +43,7 @@
 //! picture is bit-identical whatever the number of threads.
 
 mod aids;
+pub mod annotate;
 pub mod illustrative;
 mod montage;
 mod options;
@@ -54,9 +55,10 @@ mod volume;
 pub use aids::{Cutaway, ViewLayout};
 pub use illustrative::RetinaCamera;
 pub use montage::{slice_layout, Layout, SEPARATOR};
+pub use annotate::{axis_arrows, picture_layout, AxisArrow, Panel, PictureLayout, Rect};
 pub use options::{
-    CompositeMode, CompositeOptions, GivenKeys, HiddenEdges, OptionError, DEFAULT_DISTANCE,
-    MAX_PIXELS, MAX_TURNTABLE_FRAMES,
+    CompositeMode, CompositeOptions, EdgeColorBy, GivenKeys, HiddenEdges, OptionError, Toggle,
+    DEFAULT_DISTANCE, MAX_PIXELS, MAX_TITLE_CHARS, MAX_TURNTABLE_FRAMES,
 };
 pub use overlay::{PixelEdge, RetinaEdge, MAX_RETINA_DIM};
 pub use stages::DEFAULT_STAGE_DISTANCE;
@@ -112,6 +114,9 @@ pub struct RetinaExtras<'a> {
     pub camera: Option<RetinaCamera>,
     /// Feature-edge pieces to draw (see [`crate::edges::retina_edges`]).
     pub edges: &'a [RetinaEdge],
+    /// Rows of the legend the picture makes room for at its bottom (0: none; see
+    /// [`annotate::picture_layout`]): whoever draws the legend knows what it holds.
+    pub legend_rows: usize,
 }
 
 /// Composites a retina (premultiplied `rgba`, optional `depth`, numpy-order `shape`) into a
@@ -137,15 +142,25 @@ pub fn composite_retina(
     check_extras(extras, cells, shape.len())?;
     opts.validate_for(shape, depth.is_some())?;
     let m = shape.len();
-    let (w, h) = opts.size;
+    let layout = picture_layout(opts, shape, extras.legend_rows, None);
+    let (w, h) = layout.size;
+    check_size(w, h)?;
     let bg = opts.background.map(|x| x as f32);
     if m >= 3 && opts.mode != CompositeMode::Slices {
         return Ok(Image {
             width: w,
             height: h,
-            rgba: View3::new(rgba, depth, shape, extras, cells, opts).picture(opts),
+            rgba: View3::new(rgba, depth, shape, extras, cells, opts).picture(opts, &layout),
         });
     }
+    // A montage, a 2D retina or a strip: drawn in the one panel.
+    let panel = layout.panels[0].rect;
+    let inner = CompositeOptions {
+        size: (panel.w.max(1), panel.h.max(1)),
+        ..opts.clone()
+    };
+    let opts = &inner;
+    let (pw, ph) = opts.size;
     let mut vol = Volume {
         shape: shape.to_vec(),
         cells: prepare(rgba, depth, cells, opts),
@@ -162,7 +177,7 @@ pub fn composite_retina(
         );
         stage += 1;
     }
-    let rgba = match vol.shape.len() {
+    let tile = match vol.shape.len() {
         3 => render_slices(&vol, opts, bg),
         2 => {
             let (rows, cols) = (vol.shape[0], vol.shape[1]);
@@ -174,15 +189,39 @@ pub fn composite_retina(
                 gap: 0,
                 labels: false,
             };
-            render_tiles(w, h, &tiles, bg, |_, x, y| y * cols + x)
+            render_tiles(pw, ph, &tiles, bg, |_, x, y| y * cols + x)
         }
-        _ => render_strip(&vol.cells, w, h, opts.strip_height, bg),
+        _ => render_strip(&vol.cells, pw, ph, opts.strip_height, bg),
+    };
+    let rgba = if (pw, ph) == (w, h) {
+        tile
+    } else {
+        let mut img = [bg[0], bg[1], bg[2], 0.0].repeat(w * h);
+        if panel.w > 0 && panel.h > 0 {
+            for y in 0..panel.h {
+                let row = ((panel.y + y) * w + panel.x) * 4;
+                img[row..row + panel.w * 4].copy_from_slice(&tile[y * pw * 4..][..panel.w * 4]);
+            }
+        }
+        img
     };
     Ok(Image {
         width: w,
         height: h,
         rgba,
     })
+}
+
+/// Refuses a picture (of a layout's default size) of more than [`MAX_PIXELS`].
+fn check_size(w: usize, h: usize) -> NdResult<()> {
+    if w.checked_mul(h).is_none_or(|p| p > MAX_PIXELS) {
+        return Err(OptionError {
+            key: "size".into(),
+            message: format!("({w}, {h}) exceeds {MAX_PIXELS} pixels"),
+        }
+        .into());
+    }
+    Ok(())
 }
 
 /// A turntable: `frames` pictures of the retina seen by a compositing camera orbiting it, frame
@@ -206,11 +245,13 @@ pub fn composite_turntable(
     let cells = check_retina(rgba, depth, shape)?;
     check_extras(extras, cells, shape.len())?;
     opts.validate_for(shape, depth.is_some())?;
-    let (w, h) = opts.size;
     if shape.len() < 3 || opts.mode == CompositeMode::Slices {
         let one = composite_retina(rgba, depth, shape, extras, opts)?;
         return Ok(vec![one; frames]);
     }
+    let layout = picture_layout(opts, shape, extras.legend_rows, None);
+    let (w, h) = layout.size;
+    check_size(w, h)?;
     let view = View3::new(rgba, depth, shape, extras, cells, opts);
     Ok((0..frames)
         .map(|k| {
@@ -221,14 +262,14 @@ pub fn composite_turntable(
             Image {
                 width: w,
                 height: h,
-                rgba: view.picture(&o),
+                rgba: view.picture(&o, &layout),
             }
         })
         .collect())
 }
 
 /// The feature-edge pieces the illustrative picture of `opts` draws (one view, whatever
-/// `layout`), in picture pixels (x right, y down) with their N-D depths and visibility: what a
+/// `layout`, in the panel [`picture_layout`] gives it), in picture pixels (x right, y down) with their N-D depths and visibility: what a
 /// vector drawing of the picture's edges needs (`ndtrace.write_svg`). Empty unless the retina
 /// comes with edges and `opts.edges`.
 pub fn picture_edges(
@@ -246,9 +287,11 @@ pub fn picture_edges(
     }
     let o = CompositeOptions {
         mode: CompositeMode::Illustrative,
+        layout: ViewLayout::Single,
         ..opts.clone()
     };
-    Ok(View3::new(rgba, depth, shape, extras, cells, &o).pixel_edges(&o))
+    let layout = picture_layout(&o, shape, extras.legend_rows, None);
+    Ok(View3::new(rgba, depth, shape, extras, cells, &o).pixel_edges(&o, &layout))
 }
 
 fn check_extras(extras: &RetinaExtras<'_>, cells: usize, m: usize) -> NdResult<()> {

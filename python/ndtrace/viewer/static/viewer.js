@@ -191,6 +191,8 @@ export function mount(root, transport) {
         const v = aid.name in o ? o[aid.name] : aid.default;
         if (aid.kind === "bool") input.checked = !!v;
         else if (aid.kind === "text") input.value = v == null ? "" : typeof v === "string" ? JSON.stringify(v) : tomlValue(v);
+        else if (aid.kind === "choice") input.value = String(aid.choices.findIndex((c) => c === v));
+        else if (aid.kind === "string") input.value = v ?? "";
         else input.value = v;
       }
     }
@@ -240,8 +242,12 @@ export function mount(root, transport) {
       input = el("input", { type: "checkbox" });
       input.addEventListener("change", () => send({ type: "set", options: { [aid.name]: input.checked } }));
     } else if (aid.kind === "choice") {
-      input = el("select", {}, ...aid.choices.map((c) => el("option", { value: c, text: c })));
-      input.addEventListener("change", () => send({ type: "set", options: { [aid.name]: input.value } }));
+      // Choices may be strings or booleans (legend: "auto", true, false): options by index.
+      input = el("select", {}, ...aid.choices.map((c, i) => el("option", { value: String(i), text: String(c) })));
+      input.addEventListener("change", () => send({ type: "set", options: { [aid.name]: aid.choices[Number(input.value)] } }));
+    } else if (aid.kind === "string") {
+      input = el("input", { type: "text", placeholder: "none", spellcheck: "false" });
+      input.addEventListener("change", () => send({ type: "set", options: { [aid.name]: input.value === "" ? null : input.value } }));
     } else if (aid.kind === "number") {
       input = el("input", { type: "number", step: "any" });
       input.addEventListener("change", () => send({ type: "set", options: { [aid.name]: Number(input.value) } }));
