@@ -309,7 +309,7 @@ def test_caption_and_stereo_titles():
     picture = ndtrace.composite(retina, layout="stereo", title="A stereo pair")
     assert picture.shape == (540, 960, 4)  # the stereo layout's default size
     layout = _ndtrace.picture_layout(list(retina.shape), {"layout": "stereo", "title": "A stereo pair"})
-    assert [p["title"] for p in layout["panels"]] == ["left eye", "right eye"]
+    assert [p["title"] for p in layout["panels"]] == ["left", "right"]
     cap = layout["caption"]
     assert picture[cap["y"]:cap["y"] + cap["h"], :, :3].max() > 0.5
     # A size given is kept.

@@ -188,7 +188,7 @@ NAMESPACE = [
 ]
 
 #: The submodules ``import ndtrace`` leaves for their first use.
-LAZY_MODULES = ["animation", "edges", "frames", "rotation", "surfaces", "svg", "viewer"]
+LAZY_MODULES = ["animation", "edges", "frames", "rotation", "slicing", "surfaces", "svg", "viewer"]
 
 
 def test_the_lazy_namespace_has_every_name_and_loads_it_on_first_use():

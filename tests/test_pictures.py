@@ -60,7 +60,7 @@ def test_stereo_halves_are_the_two_eyes_views(tesseract):
     assert pair.shape == (60, 81, 4)
     # Each half is its eye's view, under its title.
     left, right = ndtrace._ndtrace.picture_layout(list(retina.shape), kw)["panels"]
-    assert (left["title"], right["title"]) == ("left eye", "right eye")
+    assert (left["title"], right["title"]) == ("left", "right")
     for panel, azimuth in ((left, 16.0), (right, 24.0)):
         r = panel["rect"]
         view = ndtrace.composite(retina, size=(r["w"], r["h"]), azimuth=azimuth, axes=False)

@@ -525,3 +525,41 @@ def test_session_arguments_are_checked(kwargs, match):
         ViewSession(scene_of_dim(4), **kwargs)
     with pytest.raises(TypeError, match="scene: expected an ndtrace.Scene"):
         ViewSession({"dim": 4})
+
+
+def test_slice_mode_shows_the_slice_of_the_turned_scene():
+    """Slice mode: the frame is the 3D slice x_3 = offset of the scene turned by the rolling
+    ball (the same pixels as slicing the turned scene by hand); off again shows the projection;
+    reset turns it off."""
+    scene = ndtrace.load_file(SCENES / "tesseract.toml")
+    s = ViewSession(scene, size=(64, 48))
+    assert s.hello()["slices"]
+    s.handle({"type": "roll", "steps": [[15, 4]]})
+    reply, frame = s.handle({"type": "slice", "on": True, "offset": 0.25})
+    assert reply["slice"] == 0.25 and frame == "now"
+    meta, payload = s.render(s.snapshot(), FULL, lambda: False)
+    got = decode(meta, payload)
+    data = scene.to_dict()
+    step = {"matrix": s.rotation.tolist()}
+    data["objects"] = [dict(o, transform=list(o.get("transform") or []) + [step]) for o in data["objects"]]
+    cut = ndtrace.slice_scene(ndtrace.load_dict(data), [0, 0, 0, 1], 0.25).to_dict()
+    cut["camera"]["resolution"] = [64, 48]
+    picture = ndtrace.composite(ndtrace.trace(ndtrace.load_dict(cut)), size=(64, 48),
+                                background=s.options["background"])
+    np.testing.assert_array_equal(got, ndtrace.files.to_srgb8(picture, opaque=True))
+    assert meta["retina"] == [48, 64]
+    # A draft of a new view traces the slice at the draft picture's size; turning slice mode
+    # off shows the projection again.
+    s.handle({"type": "roll", "steps": [[1, 0]]})
+    meta, _ = s.render(s.snapshot(), DRAFT, lambda: False)
+    assert meta["retina"] == [18, 24]
+    s.handle({"type": "slice", "on": False})
+    meta, _ = s.render(s.snapshot(), FULL, lambda: False)
+    assert meta["retina"] == [64, 64, 64]
+    s.handle({"type": "slice", "on": True, "offset": -0.5})
+    s.handle({"type": "reset"})
+    assert s.slice is None
+    with pytest.raises(ValueError, match=r"slice\.offset: expected a finite number"):
+        s.handle({"type": "slice", "on": True, "offset": "x"})
+    with pytest.raises(ValueError, match=r"slice mode needs dim ≥ 4"):
+        ViewSession(scene_of_dim(3), size=(32, 32)).handle({"type": "slice", "offset": 0})

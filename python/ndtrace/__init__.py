@@ -50,7 +50,7 @@ try:
     from .display import show
     from .files import read_exr, write_exr, write_image, write_png
     from .retina import Retina, trace
-    from .scene import Scene, load_dict, load_file, load_toml
+    from .scene import Scene, load_dict, load_file, load_toml, slice_scene
 except KeyboardInterrupt:
     # Ctrl-C before the handler above was installed.
     if not _started_as_command():
@@ -64,13 +64,15 @@ MAX_DIM: int = _ndtrace.MAX_DIM
 __all__ = [
     "geometry", "rotation", "frames", "mesh", "surfaces", "visible_edges", "edge_segments", "Scene",
     "Retina", "trace", "release_buffers", "InternalError", "composite", "read_exr", "write_exr",
-    "write_image", "write_png", "write_svg", "load_file", "load_dict", "load_toml", "animation",
+    "write_image", "write_png", "write_svg", "load_file", "load_dict", "load_toml", "slice_scene",
+    "animation",
     "animate", "display", "show", "viewer", "widget", "MIN_DIM", "MAX_DIM", "__version__",
 ]
 
 #: The names loaded on first use (PEP 562): name → (submodule, its attribute; None: the module).
 _LAZY: dict[str, tuple[str, str | None]] = {
-    **{m: (m, None) for m in ("animation", "edges", "frames", "rotation", "surfaces", "svg", "viewer")},
+    **{m: (m, None) for m in ("animation", "edges", "frames", "rotation", "slicing", "surfaces", "svg",
+                              "viewer")},
     "animate": ("animation", "animate"),
     "edge_segments": ("edges", "edge_segments"),
     "visible_edges": ("edges", "visible_edges"),
@@ -79,7 +81,7 @@ _LAZY: dict[str, tuple[str, str | None]] = {
 }
 
 if _typing.TYPE_CHECKING:  # the same names, for type checkers
-    from . import animation, edges, frames, rotation, surfaces, svg, viewer  # noqa: F401 - not all in __all__
+    from . import animation, edges, frames, rotation, slicing, surfaces, svg, viewer  # noqa: F401 - not all in __all__
     from .animation import animate
     from .edges import edge_segments, visible_edges
     from .svg import write_svg

@@ -9,13 +9,37 @@ from __future__ import annotations
 import copy
 import os
 import runpy
+import sys
 import tomllib
 import traceback
 
 from .scene import Scene, load_dict, load_file
 
 __all__ = ["UsageError", "ScriptError", "load_scene", "run_script", "set_path", "set_key", "apply_sets",
-           "ints"]
+           "ints", "THREADS_PER_CORE", "max_threads", "capped_threads"]
+
+#: ``--threads`` is capped at this many threads per core: more only costs memory and start-up.
+THREADS_PER_CORE = 4
+
+
+def max_threads() -> int:
+    """The most worker threads ``--threads`` may ask for."""
+    return THREADS_PER_CORE * (os.cpu_count() or 1)
+
+
+def capped_threads(threads: int | None, prog: str, quiet: bool = False) -> int | None:
+    """``--threads``: at least 1 (else a UsageError), at most :func:`max_threads` (more is
+    capped, saying so on stderr unless ``quiet``)."""
+    if threads is None:
+        return None
+    if threads < 1:
+        raise UsageError(f"--threads: must be at least 1, got {threads}")
+    if threads > max_threads():
+        if not quiet:
+            print(f"{prog}: --threads {threads} capped at {max_threads()} "
+                  f"({THREADS_PER_CORE} per core on {os.cpu_count() or 1} cores)", file=sys.stderr)
+        return max_threads()
+    return threads
 
 
 class UsageError(Exception):

@@ -4,19 +4,74 @@ aligned, one dtype), with errors that name the argument at fault.
 Each helper has one meaning, said by its name: :func:`finite_float64` is the input check of the
 geometry and rotation kernels, :func:`float32_array` the compositor's (which takes inf and NaN),
 :func:`picture_array` and :func:`picture_pixels` those of pictures, :func:`field_array` that of
-a scalar field.
+a scalar field, :func:`check_memory` the memory guard's check of an allocation before it is
+made. :func:`output_temp` and :func:`output_done` are how every output file is written: to a
+temporary file beside it, renamed into place with the mode a new file gets from the umask (or
+the mode of the file it replaces).
 """
 
 from __future__ import annotations
 
 import numbers
+import os
+import stat
+import tempfile
 
 import numpy as np
 
 from . import _ndtrace
 
 __all__ = ["c_array", "finite_float64", "broadcast_batch", "batch_size", "float32_array",
-           "picture_array", "picture_pixels", "field_array", "angle_degrees"]
+           "picture_array", "picture_pixels", "field_array", "angle_degrees", "check_memory",
+           "output_temp", "output_done", "output_mode"]
+
+
+def check_memory(nbytes: float, what: str) -> None:
+    """Refuses, before it is made, an allocation of about ``nbytes`` whose size comes from the
+    input: a ValueError of one line naming ``what`` and the limit (the core's memory guard,
+    ``NDTRACE_MEMORY_LIMIT``, ``ulimit -v``, the cgroup, free memory) instead of numpy's
+    MemoryError or the kernel's OOM killer."""
+    _ndtrace.check_memory(float(nbytes), what)
+
+
+def _umask() -> int:
+    try:  # Linux ≥ 4.7 shows it without changing it
+        with open("/proc/self/status", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def output_mode(path: str) -> int:
+    """The permission bits an output written to ``path`` gets: those of the file it replaces,
+    else what the umask leaves of 0666 (as any program's new file)."""
+    try:
+        return stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        return 0o666 & ~_umask()
+
+
+def output_temp(path: str, suffix: str) -> str:
+    """A new empty temporary file beside ``path`` (a short name, whatever the length of
+    ``path``'s, ending in ``suffix``: writers choose the format from it), to write and then
+    hand to :func:`output_done`. A folder at ``path`` is an OSError, before any work."""
+    if os.path.isdir(path):
+        raise IsADirectoryError(f"{path}: cannot write: it is a folder")
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".ndtrace-", suffix=suffix, dir=folder)
+    os.close(fd)
+    return tmp
+
+
+def output_done(tmp: str, path: str) -> None:
+    """Renames the written temporary file ``tmp`` over ``path``, with :func:`output_mode`."""
+    os.chmod(tmp, output_mode(path))
+    os.replace(tmp, path)
 
 
 def c_array(a, dtype=None) -> np.ndarray:
@@ -88,6 +143,9 @@ def picture_array(name: str, image) -> np.ndarray:
         raise ValueError(f"{name}: expected an image of shape (H, W, 4), got {a.shape}")
     if a.dtype.kind not in "biuf":
         raise ValueError(f"{name}: expected real numbers, got dtype {a.dtype}")
+    # A float32 copy, the finiteness mask and the 8-bit pixels made from it.
+    check_memory(a.shape[0] * a.shape[1] * 4 * (4 + 1 + 1 + 4.0),
+                 f"{name}: a picture of {a.shape[1]} × {a.shape[0]} pixels")
     a = c_array(a, np.float32)
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: the image holds NaN or infinite values")

@@ -16,7 +16,6 @@ table drives ``ndtrace.animate``, the CLI's ``--frames`` and scripts::
 from __future__ import annotations
 
 import os
-import tempfile
 from collections.abc import Callable
 from typing import Any
 
@@ -26,10 +25,12 @@ from . import _ndtrace
 from ._dask import render_frames
 from ._description import plain_scene, scene_reader
 from ._optional import need
-from .composite import composite as _composite, scene_options
+from ._util import output_done, output_temp
+from .composite import scene_options
 from .files import to_srgb8, write_png
 from .retina import trace
 from .scene import Scene, load_dict
+from .slicing import picture as slice_picture, slice_options, sliced
 
 __all__ = ["animate", "frame_scene", "frame_paths", "gif_frame_ms", "render_frame",
            "GIF_MEMORY_LIMIT"]
@@ -86,7 +87,12 @@ def render_frame(animated: Scene, k: int, threads: int | None, options: dict,
     """Frame ``k`` of ``animated``'s animation traced and composited with ``options``: the
     picture ``animate`` writes (here or on a Dask worker)."""
     still = frame_scene(animated, k)
-    return _composite(trace(still, threads=threads, progress=progress), threads=threads, **options)
+    if (cut := sliced(still, options.get("size"))) is not still:
+        # A [slice] (or a slice sweep): the frame is the (N−1)-D slice.
+        options = slice_options(options, cut.dim)
+        still = cut
+    return slice_picture(still, trace(still, threads=threads, progress=progress), options,
+                         threads=threads)
 
 
 def frame_paths(output: str | os.PathLike, frames: int) -> list[str]:
@@ -132,9 +138,7 @@ class _Video:
 
     def __init__(self, kind: str, path: str, fps: float) -> None:
         self.kind, self.path, self.fps = kind, path, fps
-        folder = os.path.dirname(os.path.abspath(path))
-        fd, self.tmp = tempfile.mkstemp(prefix=".ndtrace-", suffix="." + kind, dir=folder)
-        os.close(fd)
+        self.tmp = output_temp(path, "." + kind)
         self.frames: list = []  # GIF: palette images
         self.writer: Any = None  # MP4: imageio-ffmpeg's generator
         self.size: tuple[int, int] | None = None
@@ -166,7 +170,7 @@ class _Video:
                        duration=gif_frame_ms(self.fps), loop=0)
         else:
             self.writer.close()
-        os.replace(self.tmp, self.path)
+        output_done(self.tmp, self.path)
 
     def abort(self) -> None:
         if self.writer is not None:

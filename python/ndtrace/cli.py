@@ -17,6 +17,7 @@ and exits with status 130.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import signal
 import sys
@@ -24,32 +25,36 @@ import time
 import traceback
 
 from . import _ndtrace
-from ._command import ScriptError as ScriptError, UsageError, apply_sets, ints, load_scene
+from ._command import (
+    THREADS_PER_CORE as THREADS_PER_CORE,
+    ScriptError as ScriptError,
+    UsageError,
+    apply_sets,
+    capped_threads,
+    ints,
+    load_scene,
+    max_threads as max_threads,
+)
+from ._description import plain
 from ._ndtrace import __version__
 from ._optional import install
 from .animation import animate, write_frames
 from .cluster import check_address, connect, distributed_module
-from .composite import COLOR_BY, EDGE_COLOR_BY, PALETTES, composite, scene_options
+from .composite import COLOR_BY, EDGE_COLOR_BY, PALETTES, scene_options
 from .files import IMAGE_FORMATS, write_exr, write_image
 from .retina import trace
 from .scene import Scene, load_dict
+from .slicing import picture as slice_picture, slice_options, sliced
 from .svg import write_svg
 from .viewer.cli import main as view
 
 MODES: tuple[str, ...] = tuple(_ndtrace.RENDER_MODES)  # render.mode, as the core names them
 COMPOSITES: tuple[str, ...] = tuple(_ndtrace.COMPOSITE_MODES)  # composite.mode
-LAYOUTS = ("single", "sections", "stereo")  # composite.layout
+LAYOUTS = ("single", "sections", "stereo", "slice")  # composite.layout
+#: Axis names of --slice AXIS=OFFSET (also x0 … x7).
+AXES = ("x", "y", "z", "w")
 #: Frames per second of a turntable video.
 TURNTABLE_FPS = 12.0
-
-
-#: ``--threads`` is capped at this many threads per core: more only costs memory and start-up.
-THREADS_PER_CORE = 4
-
-
-def max_threads() -> int:
-    """The most worker threads ``--threads`` may ask for."""
-    return THREADS_PER_CORE * (os.cpu_count() or 1)
 
 
 def _terminate(signum, _frame):
@@ -139,6 +144,9 @@ def _parser() -> argparse.ArgumentParser:
                    help="every object's material.color_by: a palette colour per cell, per object, "
                    "or the N-D depth through a colormap")
     p.add_argument("--palette", choices=PALETTES, help="every object's material.palette (default tab10)")
+    p.add_argument("--slice", metavar="AXIS=OFFSET|NORMAL:OFFSET",
+                   help="render the (N−1)-D slice by a hyperplane: w=0.3 (an axis: x, y, z, w or "
+                        "x0 … x7) or 1,0,0,1:0.5 (normal and offset); sets [slice]")
     p.add_argument("--frames", type=int, metavar="K",
                    help="render K frames of the scene's [animation] (implied by -o .gif/.mp4)")
     p.add_argument("--video", choices=("gif", "mp4", "none"), default="gif",
@@ -259,9 +267,47 @@ def _composite_flags(args: argparse.Namespace) -> dict:
     return keys
 
 
+def slice_flag(text: str, dim: int) -> dict:
+    """The ``[slice]`` table of ``--slice``: ``AXIS=OFFSET`` (x, y, z, w or x0 … x7) or
+    ``NORMAL:OFFSET`` (N comma-separated numbers, then the offset)."""
+    def number(word: str) -> float:
+        try:
+            x = float(word)
+        except ValueError:
+            raise UsageError(f"--slice {text}: {word!r} is not a number") from None
+        if not math.isfinite(x):
+            raise UsageError(f"--slice {text}: {word!r} is not finite")
+        return x
+
+    if "=" in text:
+        axis, _, value = text.partition("=")
+        axis = axis.strip().lower()
+        names = {name: k for k, name in enumerate(AXES)} | {f"x{k}": k for k in range(8)}
+        if axis not in names or names[axis] >= dim:
+            valid = ", ".join(list(AXES[:dim]) + [f"x0 … x{dim - 1}"])
+            raise UsageError(f"--slice {text}: unknown axis {axis!r} for dim = {dim} "
+                             f"(expected {valid})")
+        normal = [0.0] * dim
+        normal[names[axis]] = 1.0
+        return {"normal": normal, "offset": number(value)}
+    if ":" in text:
+        vector, _, value = text.rpartition(":")
+        normal = [number(w) for w in vector.split(",")]
+        if len(normal) != dim:
+            raise UsageError(f"--slice {text}: expected {dim} numbers before ':' (dim = {dim}), "
+                             f"got {len(normal)}")
+        if not any(normal):
+            raise UsageError(f"--slice {text}: the normal must not be zero")
+        return {"normal": normal, "offset": number(value)}
+    raise UsageError(f"--slice {text}: expected AXIS=OFFSET (e.g. w=0.3) or NORMAL:OFFSET "
+                     "(e.g. 1,0,0,1:0.5)")
+
+
 def _check_output(path: str, exts: tuple[str, ...], option: str) -> None:
     if not path.lower().endswith(exts):
         raise UsageError(f"{option} {path}: unknown extension: expected {' or '.join(exts)}")
+    if os.path.isdir(path):
+        raise UsageError(f"{option} {path}: is a folder, not a file to write")
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise UsageError(f"{option} {path}: folder {folder} does not exist")
@@ -297,13 +343,7 @@ def run(argv: list[str] | None = None) -> int:
     if os.path.realpath(args.scene) in (os.path.realpath(args.output),
                                          os.path.realpath(args.retina or args.output)):
         raise UsageError(f"{args.scene}: an output would overwrite the scene file")
-    if args.threads is not None and args.threads < 1:
-        raise UsageError(f"--threads: must be at least 1, got {args.threads}")
-    if args.threads is not None and args.threads > max_threads():
-        if not args.quiet:
-            print(f"ndtrace: --threads {args.threads} capped at {max_threads()} "
-                  f"({THREADS_PER_CORE} per core on {os.cpu_count() or 1} cores)", file=sys.stderr)
-        args.threads = max_threads()
+    args.threads = capped_threads(args.threads, "ndtrace", args.quiet)
     for name in ("samples", "seed", "frames"):
         value = getattr(args, name)
         if value is not None and not 0 <= value < 2**32:
@@ -325,6 +365,8 @@ def run(argv: list[str] | None = None) -> int:
         if value is not None:
             for o in data.get("objects") or []:
                 o["material"] = {**(o.get("material") or {}), key: value}
+    if args.slice is not None:
+        data["slice"] = slice_flag(args.slice, int(data["dim"]))
     comp = {**(data.get("composite") or {}), **_composite_flags(args)}
     if comp:
         data["composite"] = comp
@@ -338,6 +380,13 @@ def run(argv: list[str] | None = None) -> int:
 
     if animating and scene.to_dict().get("animation") is None:
         raise UsageError(f"{args.scene}: the scene has no [animation] table to render frames of")
+    # The picture (or a turntable's frames) checked by the memory guard before anything is
+    # traced: a refusal names --size or --turntable's key and the limit.
+    picture = {k: v for k, v in _picture_options(scene, args.transparent).items() if k != "background"}
+    if not animating:
+        _ndtrace.check_picture_memory(list(scene.retina_shape), plain(picture))
+    else:
+        _ndtrace.check_picture_memory(list(scene.retina_shape), plain(dict(picture, turntable=0)))
     if args.dask:
         try:
             distributed_module()
@@ -366,6 +415,11 @@ def _render(args: argparse.Namespace, scene: Scene, animating: bool, turntable: 
             written = ([f"{len(pngs)} frames {pngs[0]} … {pngs[-1]}"] if pngs else []) + videos
             print("wrote " + " and ".join(written), file=sys.stderr)
         return 0
+    options = _picture_options(scene, args.transparent)
+    if (cut := sliced(scene, options.get("size"))) is not scene:
+        # The (N−1)-D slice is the scene to trace (the CLI's [slice], layout not "slice").
+        options = slice_options(options, cut.dim)
+        scene = cut
     bar.begin("tracing")
     retina = trace(scene, threads=args.threads, progress=bar.update, client=client)
     bar.end()
@@ -374,12 +428,13 @@ def _render(args: argparse.Namespace, scene: Scene, animating: bool, turntable: 
             raise UsageError("--turntable: an SVG is one drawing; write a .gif, .mp4 or .png")
         if args.retina:
             write_exr(args.retina, retina)
-        write_svg(args.output, retina, threads=args.threads, **_picture_options(scene, False))
+        write_svg(args.output, retina, threads=args.threads,
+                  **{**options, "background": _picture_options(scene, False)["background"]})
         if not args.quiet:
             print(f"wrote {args.output}" + (f" and {args.retina}" if args.retina else ""), file=sys.stderr)
         return 0
     bar.begin("compositing")
-    picture = composite(retina, **_picture_options(scene, args.transparent))
+    picture = slice_picture(scene, retina, options, threads=args.threads)
     bar.update(1, 1)
     bar.end()
     if turntable:

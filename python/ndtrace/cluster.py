@@ -28,6 +28,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import signal
+import socket
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -36,15 +37,63 @@ import numpy as np
 from ._dask import SLABS_PER_THREAD, distributed_module, render_frames as _render_frames, trace_slabs
 from .animation import render_frame
 
-__all__ = ["connect", "distributed_module", "trace_slabs", "render_frames", "SLABS_PER_THREAD"]
+__all__ = ["connect", "check_address", "probe", "distributed_module", "trace_slabs", "render_frames", "SLABS_PER_THREAD"]
+
+
+#: Seconds a scheduler has to accept a connection and say hello.
+CONNECT_TIMEOUT = 10.0
+
+
+def _host_port(address: str) -> tuple[str, int] | None:
+    """(HOST, PORT) of ``tcp://HOST:PORT`` (an IPv6 host in brackets), else None."""
+    if not address.startswith("tcp://"):
+        return None
+    rest = address[len("tcp://"):].rstrip("/")
+    host, sep, port = rest.rpartition(":")
+    host = host[1:-1] if host.startswith("[") and host.endswith("]") else host
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        return None
+    return host, int(port)
 
 
 def check_address(address: str) -> str:
-    """``address`` if it is ``local`` or a scheduler address (``SCHEME://…``); else ValueError."""
-    if address != "local" and "://" not in address:
-        raise ValueError("expected 'local' or a scheduler address tcp://HOST:PORT, got "
-                         f"{address!r}")
-    return address
+    """``address`` if it is ``local`` or a scheduler address ``tcp://HOST:PORT``; else a
+    ValueError (other protocols, ``tls://`` and ``ucx://``, need a security or UCX setup
+    that the command line does not make: give a Client to the Python API instead)."""
+    if address == "local" or _host_port(address) is not None:
+        return address
+    scheme = address.partition("://")[0] if "://" in address else ""
+    if scheme and scheme != "tcp":
+        raise ValueError(f"expected 'local' or a scheduler address tcp://HOST:PORT, got {address!r} "
+                         f"({scheme}:// needs a setup of its own: pass a dask Client to "
+                         "ndtrace.trace or ndtrace.animate instead)")
+    raise ValueError(f"expected 'local' or a scheduler address tcp://HOST:PORT, got {address!r}")
+
+
+def probe(address: str, timeout: float | None = None) -> None:
+    """Checks that a Dask scheduler answers at ``tcp://HOST:PORT`` before a Client waits on it:
+    a scheduler says hello first (its handshake, a message that starts with its length as 8
+    bytes little-endian). A ValueError says what is wrong: nothing listens, it does not answer
+    within ``timeout`` seconds (default :data:`CONNECT_TIMEOUT`; a silent server, or an HTTP server waiting for a request), or
+    it answers something else."""
+    host, port = _host_port(address) or ("", 0)
+    timeout = CONNECT_TIMEOUT if timeout is None else timeout
+    try:
+        with socket.create_connection((host, port), timeout=timeout) as conn:
+            conn.settimeout(timeout)
+            hello = b""
+            while len(hello) < 8:
+                chunk = conn.recv(8 - len(hello))
+                if not chunk:
+                    raise ValueError("it closed the connection without a Dask handshake "
+                                     "(is it a Dask scheduler?)")
+                hello += chunk
+    except TimeoutError:
+        raise ValueError(f"no Dask handshake within {timeout:g} s (is it a Dask scheduler?)") from None
+    except OSError as e:
+        raise ValueError(e.strerror or str(e)) from None
+    if not 0 < int.from_bytes(hello, "little") < (64 << 20):
+        raise ValueError("it does not speak Dask's protocol (is it a Dask scheduler?)")
 
 
 @contextlib.contextmanager
@@ -69,9 +118,11 @@ def connect(address: str) -> Iterator[Any]:
             cluster.close()
         return
     try:
-        client = distributed.Client(address, timeout="10s")
-    except OSError as e:
-        raise ValueError(f"--dask {address}: cannot reach the Dask scheduler: {e}") from None
+        probe(address)
+        client = distributed.Client(address, timeout=f"{CONNECT_TIMEOUT:g}s")
+    except (Exception, SystemExit) as e:  # noqa: BLE001 - distributed raises many kinds; one line
+        reason = (str(e).strip() or type(e).__name__).splitlines()[0]
+        raise ValueError(f"--dask {address}: cannot reach the Dask scheduler: {reason}") from None
     with client:
         yield client
 

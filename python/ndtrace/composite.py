@@ -72,6 +72,7 @@ def composite(
     axes_frame: Sequence[Sequence[float]] | None = None,
     title: str | None = None,
     edge_color_by: str = "depth",
+    cubes: dict | None = None,
     threads: int | None = None,
 ) -> np.ndarray:
     """Composites a retina into a 2D picture: a float32 array ``(H, W, 4)``, linear RGBA, row 0
@@ -162,7 +163,10 @@ def composite(
       and three orthogonal sections through ``section`` in the others (top right across z:
       the retina slice face-on; bottom left across x: z right, y up; bottom right across y:
       x right, z down); ``"stereo"`` a side-by-side pair for parallel viewing, the left half
-      from ``azimuth − stereo_angle/2``, the right from ``azimuth + stereo_angle/2``.
+      from ``azimuth − stereo_angle/2``, the right from ``azimuth + stereo_angle/2``;
+      ``"slice"`` the view in the left half, the right half left for the scene's ``[slice]``
+      (the command line and :func:`ndtrace.animate` draw the slice there and mark the
+      hyperplane in the view: :func:`ndtrace.slicing.picture`).
     * ``section`` [(0, 0, 0)] — the world point (volume centred, longest side spanning
       [−1, 1]; x columns, y up, z slices) the sections pass through.
     * ``stereo_angle`` [6] — degrees between the eyes of the stereo pair, 0 … 30.
@@ -171,6 +175,10 @@ def composite(
       "offset": d}`` (removes n̂·x > d), ``{"shape": "sphere", "center": [...], "radius": r}``
       or ``{"shape": "box", "min": [...], "max": [...]}``; cells are removed smoothly by the
       fraction of a cell inside, and feature edges are cut with them.
+    * ``cubes`` [None] — for N ≥ 4, ``{"size": s}`` (0 < s ≤ 1, default 0.6): each occupied
+      cell (coverage ≥ ½) drawn as an opaque cube of side s cells, the course's "break into
+      tiny cubes: leave a little space instead of transparency", whatever the mode; faces
+      shaded by a headlight.
     * ``turntable`` [0] — F > 0 returns F frames, frame k seen from ``azimuth + 360°·k/F``:
       motion parallax for the price of one trace (the retina is prepared once).
     * ``legend`` ["auto"] — a strip along the bottom: a colour bar per colormap (its name,
@@ -187,7 +195,7 @@ def composite(
       (the viewer passes its rotation, so the glyph turns with the object).
     * ``title`` [None] — a caption line above the picture. Panels have their own titles
       (sections: "volume" and each section's coordinate, in the scene's units for an
-      axis-aligned orthographic camera; stereo: "left eye", "right eye"; N ≥ 5: the axes the
+      axis-aligned orthographic camera; stereo: "left", "right"; N ≥ 5: the axes the
       stages collapse).
     * ``edge_color_by`` ["depth"] — the feature edges: "depth" (the course's depth cueing:
       thicker and stronger near the N-D eye, thinner and fainter far from it), "direction"
@@ -236,6 +244,8 @@ def composite(
         options["axes_frame"] = np.asarray(axes_frame, dtype=float).tolist()
     if cutaway is not None:
         options["cutaway"] = cutaway
+    if cubes is not None:
+        options["cubes"] = cubes
     if background is not None:
         options["background"] = background
     if stages is not None:

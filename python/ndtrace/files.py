@@ -2,19 +2,19 @@
 TIFF through Pillow (format: docs/retina-format.md).
 
 Every file is written to a temporary file and renamed into place: an interrupted or failed
-write never leaves a broken file where a good one was.
+write never leaves a broken file where a good one was. A new file gets the mode the umask gives
+(0644 under umask 022), a file replaced keeps its own.
 """
 
 from __future__ import annotations
 
 import numbers
 import os
-import tempfile
 
 import numpy as np
 
 from . import _ndtrace
-from ._util import c_array, picture_array, picture_pixels
+from ._util import c_array, output_done, output_temp, picture_array, picture_pixels
 from .retina import Retina
 
 __all__ = ["write_exr", "read_exr", "write_png", "write_image", "IMAGE_FORMATS"]
@@ -100,11 +100,10 @@ def write_image(path: str | os.PathLike, image, *, transparent: bool = False,
     from PIL import Image
 
     options = {"quality": int(quality)} if kind in ("JPEG", "WEBP") else {}
-    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.tmp-", suffix=ext, dir=folder)
-    os.close(fd)
+    tmp = output_temp(path, ext)
     try:
         Image.fromarray(pixels).save(tmp, format=kind, **options)
-        os.replace(tmp, path)
+        output_done(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)

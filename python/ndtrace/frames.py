@@ -26,6 +26,14 @@ Conventions
   quaternions and orthonormal frames are checked with the tolerances of ``ndtrace.rotation``
   (``UNIT_TOLERANCE``, ``ORTHOGONALITY_TOLERANCE``, 1e-9: they are computed values).
 
+Surface frames (notes, "3-Manifold of Frames for a Patch": "for surfaces, we simply replace a
+curve's tangent by a surface's normal"): :func:`surface_frames` gives, for a sampled patch
+(U, V, 3), unit quaternions (U, V, 4) of frames whose third axis is the surface normal, by
+geodesic reference, parallel transport along one edge then across, or the course's "optimal
+quaternion frame on a patch" (the quaternion patch of least area in S³);
+:func:`quaternion_patch` turns them into a triangulated surface of R⁴ for ``shape =
+"surface"``.
+
 Example (the (3, 5) torus knot with its closed minimal-length quaternion frame, as a tube)::
 
     import ndtrace.frames as fr
@@ -62,6 +70,8 @@ __all__ = [
     "frame_quaternions", "quaternion_length", "quaternion_loop",
     "tait_matrix", "tait", "frame_curvatures", "twist_angles",
     "torus_knot", "icosphere", "tube_3d", "tube_4d",
+    "surface_normals", "surface_frames", "quaternion_patch", "patch_area", "smooth_patch",
+    "spherical_patch",
 ]
 
 #: a unit tangent whose change over two samples is below this has zero curvature (Frenet)
@@ -696,3 +706,222 @@ def tube_4d(curve4, radius: float, subdivisions: int = 0, closed: bool = False):
         raise ValueError(f"radius: tetrahedron {int(np.argmax(flat))} of the tube is degenerate "
                          f"(samples too close together for radius {radius!r}?)")
     return vertices, tets.astype(np.int64)
+
+
+# -- surface frames and quaternion patches (Part II(A), "3-Manifold of Frames for a Patch") -------
+def _patch(name: str, points) -> np.ndarray:
+    p = finite_float64(name, points, 3, "(U, V, 3)")
+    if p.ndim != 3 or p.shape[2] != 3 or p.shape[0] < 3 or p.shape[1] < 3:
+        raise ValueError(f"{name}: expected a grid of shape (U, V, 3) with U, V ≥ 3, got {p.shape}")
+    return p
+
+
+def _grid_difference(p: np.ndarray, axis: int) -> np.ndarray:
+    """Central differences along ``axis`` (second-order one-sided at the ends)."""
+    d = np.empty_like(p)
+    a = np.moveaxis(p, axis, 0)
+    out = np.moveaxis(d, axis, 0)
+    out[1:-1] = a[2:] - a[:-2]
+    out[0] = -3 * a[0] + 4 * a[1] - a[2]
+    out[-1] = 3 * a[-1] - 4 * a[-2] + a[-3]
+    return d
+
+
+def surface_normals(points) -> np.ndarray:
+    """Unit normals (U, V, 3) of a sampled patch ``points`` (U, V, 3): ∂P/∂u × ∂P/∂v by central
+    differences (second-order one-sided at the edges), normalized. A degenerate grid point
+    (parallel or zero differences) is a ValueError naming it."""
+    p = _patch("points", points)
+    n = np.cross(_grid_difference(p, 0), _grid_difference(p, 1))
+    length = np.linalg.norm(n, axis=-1)
+    scale = np.linalg.norm(_grid_difference(p, 0), axis=-1) * np.linalg.norm(
+        _grid_difference(p, 1), axis=-1)
+    bad = ~(length > 1e-12 * scale)
+    if np.any(bad):
+        i, j = (int(x) for x in np.argwhere(bad)[0])
+        raise ValueError(f"points: the patch is degenerate at grid point ({i}, {j}) (no normal)")
+    return n / length[..., None]
+
+
+def _geodesic_reference_quaternions(n: np.ndarray) -> np.ndarray:
+    """The quaternions of the course's geodesic reference frames R(ẑ·n̂, ẑ × n̂): the minimal
+    rotation taking ẑ to n̂, q = normalize(1 + ẑ·n̂, ẑ × n̂) (continuous in n̂ away from −ẑ).
+    Its third axis is n̂."""
+    z = np.array([0.0, 0.0, 1.0])
+    q = np.concatenate([1.0 + n[..., 2:3], np.cross(z, n)], axis=-1)
+    length = np.linalg.norm(q, axis=-1, keepdims=True)
+    if np.any(length < 1e-6):
+        raise ValueError("points: a normal points along −z, where the geodesic reference "
+                         "frame is undefined; turn the patch")
+    return q / length
+
+
+def _spin(n: np.ndarray, theta: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """(cos θ/2, n̂ sin θ/2) · g: the frame g turned by θ about its third axis n̂."""
+    h = 0.5 * theta[..., None]
+    r = np.concatenate([np.cos(h), np.sin(h) * n], axis=-1)
+    return quat_multiply(r, g)
+
+
+def _angles(q: np.ndarray, n: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """θ with q = _spin(n, θ, g), unwrapped along the grid for continuity."""
+    r = quat_multiply(q, quat_conjugate(g))
+    theta = 2 * np.arctan2(np.sum(r[..., 1:] * n, axis=-1), r[..., 0])
+    theta[:, 0] = np.unwrap(theta[:, 0])
+    return np.unwrap(theta, axis=1)
+
+
+def patch_area(q) -> float:
+    """The area of the quaternion patch of a grid of unit quaternions ``q`` (U, V, 4): the sum
+    of its triangles' areas in R⁴ (each grid cell split along the diagonal (i, j)–(i+1, j+1)),
+    the quantity the minimal-area frames minimize."""
+    q = finite_float64("q", q, 3, "(U, V, 4)")
+    if q.ndim != 3 or q.shape[2] != 4:
+        raise ValueError(f"q: expected shape (U, V, 4), got {q.shape}")
+    return float(_area(q)[0])
+
+
+def _area(q: np.ndarray, dq: np.ndarray | None = None):
+    """The patch's area and, with ``dq`` (U, V, 4) = ∂q/∂θ, its gradient in θ (U, V)."""
+    a, b, c, d = q[:-1, :-1], q[1:, :-1], q[1:, 1:], q[:-1, 1:]
+    total = 0.0
+    grad = np.zeros(q.shape[:2]) if dq is not None else None
+    for (x, y, z, ix, iy, iz) in ((a, b, c, (0, 0), (1, 0), (1, 1)), (a, c, d, (0, 0), (1, 1), (0, 1))):
+        e1, e2 = y - x, z - x
+        g11, g22, g12 = (np.sum(e1 * e1, -1), np.sum(e2 * e2, -1), np.sum(e1 * e2, -1))
+        area = 0.5 * np.sqrt(np.maximum(g11 * g22 - g12 * g12, 0.0))
+        total += float(area.sum())
+        if grad is not None and dq is not None:
+            safe = np.where(area > 0, area, 1.0)[..., None]
+            # ∂A/∂e1 = (g22 e1 − g12 e2)/(4A), ∂A/∂e2 = (g11 e2 − g12 e1)/(4A).
+            d1 = np.where(area[..., None] > 0, (g22[..., None] * e1 - g12[..., None] * e2) / (4 * safe), 0)
+            d2 = np.where(area[..., None] > 0, (g11[..., None] * e2 - g12[..., None] * e1) / (4 * safe), 0)
+            U, V = q.shape[0] - 1, q.shape[1] - 1
+            for (di, dj), w in ((ix, -d1 - d2), (iy, d1), (iz, d2)):
+                grad[di:di + U, dj:dj + V] += np.sum(w * dq[di:di + U, dj:dj + V], -1)
+    return total, grad
+
+
+def _minimal_area(n: np.ndarray, g: np.ndarray, theta: np.ndarray, iterations: int) -> np.ndarray:
+    """Gradient descent on the angles θ with a backtracking line search: every step lowers the
+    quaternion patch's area, so the result is at most the start's."""
+    def at(t):
+        q = _spin(n, t, g)
+        h = 0.5 * t[..., None]
+        dr = 0.5 * np.concatenate([-np.sin(h), np.cos(h) * n], axis=-1)
+        return q, quat_multiply(dr, g)
+
+    q, dq = at(theta)
+    area, grad = _area(q, dq)
+    step = 1.0
+    for _ in range(iterations):
+        gg = float(np.sum(grad * grad))
+        if gg < 1e-24:
+            break
+        while step > 1e-12:
+            t = theta - step * grad
+            q1, dq1 = at(t)
+            a1, g1 = _area(q1, dq1)
+            if a1 <= area - 1e-4 * step * gg:
+                theta, area, grad, q = t, a1, g1, q1
+                step *= 2.0
+                break
+            step *= 0.5
+        else:
+            break
+    return theta
+
+
+def surface_frames(points, method: Literal["geodesic_reference", "parallel_transport",
+                                         "minimal_area"] = "minimal_area",
+                   iterations: int = 500) -> np.ndarray:
+    """Unit quaternions (U, V, 4) of frames on a sampled patch ``points`` (U, V, 3) whose third
+    axis is the surface normal (:func:`surface_normals`): ``quat_to_matrix(q)[..., :, 2] = n̂``
+    (notes, "3-Manifold of Frames for a Patch": a curve's tangent replaced by the normal).
+    Every such frame is the geodesic reference ``R(ẑ·n̂, ẑ × n̂)`` turned by an angle θ about n̂
+    (the ring of frames at a point); the methods choose θ:
+
+    * ``"geodesic_reference"``: θ = 0, the minimal rotation taking ẑ to n̂ (undefined where a
+      normal is −ẑ: ValueError);
+    * ``"parallel_transport"``: the frame at (0, 0) is the geodesic reference, transported
+      along the edge j = 0 and then across each row i → i + 1 by the minimal rotation of each
+      normal to the next (the discrete parallel transport of curve frames);
+    * ``"minimal_area"``: the course's optimal quaternion frame on a patch — θ chosen to
+      minimize the area (:func:`patch_area`) of the quaternion patch in S³, by gradient descent
+      from the better of the other two (so its area is at most theirs), ``iterations`` steps.
+
+    Signs are continuous over the grid (neighbouring quaternions have positive dot products
+    for a smooth patch). ValueError names ``points``, ``method`` or ``iterations``."""
+    p = _patch("points", points)
+    if method not in ("geodesic_reference", "parallel_transport", "minimal_area"):
+        raise ValueError(f"method: expected 'geodesic_reference', 'parallel_transport' or "
+                         f"'minimal_area', got {method!r}")
+    iterations = _count("iterations", iterations, 0)
+    n = surface_normals(p)
+    g = _geodesic_reference_quaternions(n)
+    if method == "geodesic_reference":
+        return g
+    # Parallel transport: down the first column, then along each row.
+    q = np.empty_like(g)
+    q[0, 0] = g[0, 0]
+
+    def step(a, b, qa):
+        # The minimal rotation taking normal a to normal b, as a quaternion, then the frame.
+        axis = np.cross(a, b)
+        c = float(np.dot(a, b))
+        m = np.concatenate([[1.0 + c], axis])
+        return quat_multiply(m / np.linalg.norm(m), qa)
+
+    for i in range(1, p.shape[0]):
+        q[i, 0] = step(n[i - 1, 0], n[i, 0], q[i - 1, 0])
+    for j in range(1, p.shape[1]):
+        for i in range(p.shape[0]):
+            q[i, j] = step(n[i, j - 1], n[i, j], q[i, j - 1])
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    if method == "parallel_transport":
+        return q
+    theta_pt = _angles(q, n, g)
+    start = theta_pt if _area(q)[0] <= _area(g)[0] else np.zeros(n.shape[:2])
+    return _spin(n, _minimal_area(n, g, start, iterations), g)
+
+
+def quaternion_patch(frames, method: Literal["geodesic_reference", "parallel_transport",
+                                            "minimal_area"] = "minimal_area"):
+    """The course's quaternion surface patch: the map of a patch's frames into S³ ⊂ R⁴ as a
+    triangulated surface ``(vertices (V, 4), triangles (T, 3))``, ready for ``shape =
+    "surface"``. ``frames`` is a grid of unit quaternions (U, V, 4) (from
+    :func:`surface_frames`) or of points (U, V, 3), whose frames ``method`` chooses. Vertex
+    ``i·V + j`` is grid point (i, j); each grid cell is two triangles, split along the diagonal
+    (i, j)–(i+1, j+1) as :func:`patch_area` counts them."""
+    a = finite_float64("frames", frames, 3, "(U, V, 4) or (U, V, 3)")
+    if a.ndim != 3 or a.shape[2] not in (3, 4):
+        raise ValueError(f"frames: expected quaternions (U, V, 4) or points (U, V, 3), got {a.shape}")
+    q = surface_frames(a, method) if a.shape[2] == 3 else a
+    if a.shape[2] == 4:
+        _k.check_units("frames", np.ascontiguousarray(q).reshape(-1), 4, "quaternion")
+    U, V = q.shape[:2]
+    idx = np.arange(U * V).reshape(U, V)
+    a0, b0, c0, d0 = idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]
+    triangles = np.concatenate([np.stack([a0, b0, c0], -1).reshape(-1, 3),
+                                np.stack([a0, c0, d0], -1).reshape(-1, 3)])
+    return q.reshape(-1, 4).copy(), triangles.astype(np.int64)
+
+
+def smooth_patch(n: int = 16, height: float = 0.4) -> np.ndarray:
+    """The course's smooth example patch, a bump z = h·exp(−2(x² + y²)) − h·x·y/2 over
+    [−1, 1]², sampled on an n × n grid → (n, n, 3)."""
+    n = _count("n", n, 3)
+    x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n), indexing="ij")
+    z = height * (np.exp(-2 * (x * x + y * y)) - 0.5 * x * y)
+    return np.stack([x, y, z], axis=-1)
+
+
+def spherical_patch(n: int = 16, extent: float = 1.0) -> np.ndarray:
+    """The course's spherical example: a patch of the unit sphere around its north pole,
+    longitude and colatitude-like coordinates (u, v) ∈ [−extent, extent]² mapped by
+    (sin u cos v, sin v, cos u cos v) → (n, n, 3)."""
+    n = _count("n", n, 3)
+    extent = _positive("extent", extent)
+    u, v = np.meshgrid(np.linspace(-extent, extent, n), np.linspace(-extent, extent, n),
+                       indexing="ij")
+    return np.stack([np.sin(u) * np.cos(v), np.sin(v), np.cos(u) * np.cos(v)], axis=-1)

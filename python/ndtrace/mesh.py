@@ -20,6 +20,7 @@ Every function takes and returns such a pair, so they compose::
     vertices, simplices = ndtrace.mesh.thicken_surface(v4, triangles, radius=0.05)  # a tube in R^4
     vertices, simplices = ndtrace.mesh.thicken_points(points4, radius=0.01)  # tiny 3-spheres
     vertices, simplices = ndtrace.mesh.elevation_map(field, height=0.5)  # w = 0.5·f(x, y, z)
+    coords, pieces, basis, origin = ndtrace.mesh.slice(vertices, simplices, [0, 0, 0, 1], 0.3)
     scene.add_object("mesh", mesh=(vertices, simplices))               # or a trimesh / meshio mesh
 
 File formats: ``.npz`` archives with arrays ``vertices`` and ``simplices`` (any N, read by the
@@ -32,7 +33,9 @@ in the hyperplane x_3 = 0 of R^4).
 
 from __future__ import annotations
 
+import contextlib
 import errno
+import io
 import numbers
 import os
 import warnings
@@ -41,12 +44,12 @@ import numpy as np
 
 from . import _ndtrace
 from ._optional import need
-from ._util import angle_degrees, field_array
+from ._util import angle_degrees, check_memory, field_array
 from .geometry import generalized_cross
 from .thicken import thicken_points, thicken_surface
 
 __all__ = ["convex_hull", "orient", "feature_edges", "read", "read_field", "from_object",
-           "elevation_map", "thicken_surface", "thicken_points", "CELL_TYPES"]
+           "elevation_map", "slice", "thicken_surface", "thicken_points", "CELL_TYPES"]
 
 #: The meshio cell types that hold the (N−1)-simplices of a dimension-N scene ("quad" cells are
 #: split into two triangles).
@@ -276,36 +279,112 @@ def from_object(obj, dim: int | None = None) -> tuple[np.ndarray, np.ndarray]:
                     f"{type(obj).__name__}")
 
 
+def _npz_array(path: str, name: str | None) -> tuple[np.ndarray, str]:
+    """An array of an ``.npy`` or ``.npz`` file read by the core's reader (the one the scene
+    loaders use): header first, the memory its shape needs checked by the guard before the data
+    is read or inflated, an archive member's CRC-32 checked; ``(float64 array, stored dtype)``.
+    Every problem is a ValueError naming the file."""
+    return _ndtrace.read_array(path, name)
+
+
+#: How many bytes of a PLY file may precede its ``end_header`` line.
+PLY_HEADER_LIMIT = 1 << 20
+
+
+def _precheck(path: str, ext: str) -> None:
+    """Refuses files on which a meshio reader would loop forever (it reads lines until it
+    finds what it looks for, and at the end of the file gets empty lines for ever): a PLY
+    file's header must end with ``end_header``, an OFF file must have its counts line after
+    ``OFF``, a Nastran file its ``ENDDATA``, and every ``Begin …`` block of an MDPA file its
+    ``End …``. A ValueError names the file and what is missing."""
+    if ext == ".ply":
+        with open(path, "rb") as f:
+            head = f.read(PLY_HEADER_LIMIT)
+        if not any(line.strip() == b"end_header" for line in head.splitlines()):
+            raise ValueError(f"{path}: not a PLY file meshio can read: no end_header line in its "
+                             f"header (the first {PLY_HEADER_LIMIT} bytes)")
+    elif ext == ".off":
+        with open(path, "rb") as f:
+            f.readline()  # "OFF" (meshio checks it)
+            for line in f:
+                line = line.strip()
+                if line and not line.startswith(b"#"):
+                    return
+        raise ValueError(f"{path}: not an OFF file meshio can read: no line of counts "
+                         "(vertices, faces, edges) after OFF")
+    elif ext in (".nas", ".bdf", ".fem"):
+        with open(path, "rb") as f:
+            if not any(line.startswith(b"ENDDATA") for line in f):
+                raise ValueError(f"{path}: not a Nastran file meshio can read: no ENDDATA line")
+    elif ext == ".mdpa":
+        with open(path, "rb") as f:
+            open_blocks: list[bytes] = []
+            for line in f:
+                words = line.split()
+                if len(words) >= 2 and words[0] == b"Begin":
+                    open_blocks.append(words[1])
+                elif len(words) >= 2 and words[0] == b"End" and open_blocks:
+                    open_blocks.pop()
+            if open_blocks:
+                raise ValueError(f"{path}: not an MDPA file meshio can read: its Begin "
+                                 f"{open_blocks[-1].decode(errors='replace')} block has no End")
+
+
+def _meshio_read(meshio, path: str):
+    """``meshio.read(path)`` as a well-behaved reader: whatever goes wrong is a ValueError naming
+    the file, with what meshio printed or raised (meshio prints its readers' errors and then
+    calls ``sys.exit(1)``, a SystemExit that ``except Exception`` does not catch); Ctrl-C
+    (KeyboardInterrupt) still stops it."""
+    printed = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(printed), contextlib.redirect_stderr(printed):
+            return meshio.read(path)
+    except (Exception, SystemExit, RecursionError) as e:  # noqa: BLE001 - meshio raises many kinds
+        said = [line.strip() for line in printed.getvalue().splitlines() if line.strip()]
+        reason = str(e).strip() if not isinstance(e, SystemExit) else ""
+        if isinstance(e, MemoryError):
+            reason = "it asks for more memory than there is"
+        elif isinstance(e, RecursionError):
+            reason = "it is nested too deeply"
+        reason = (reason or "; ".join(said[:2]) or type(e).__name__).splitlines()[0]
+        raise ValueError(f"{path}: meshio cannot read it: {reason}") from None
+
+
 def read(path: str | os.PathLike, dim: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Reads a mesh file into ``(vertices, simplices)``: an ``.npz`` with arrays ``vertices``
     (V, N) and ``simplices`` (S, N), or any file meshio reads (see the module docs), for a
     scene of dimension ``dim`` (None: from the file). Raises FileNotFoundError for a missing
     file, ImportError naming the ``mesh`` extra when meshio is needed and missing, and
-    ValueError for a file that holds no mesh of that dimension."""
+    ValueError naming the file for a file that holds no mesh of that dimension or cannot be
+    read (broken, hostile, or too big for the memory guard)."""
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise FileNotFoundError(errno.ENOENT, "no such mesh file", path)
     ext = os.path.splitext(path)[1].lower()
     if ext == ".npz":
-        with np.load(path) as z:
-            missing = [k for k in ("vertices", "simplices") if k not in z.files]
-            if missing:
-                raise ValueError(f"{path}: the .npz has no array named {missing[0]!r} "
-                                 f"(arrays: {', '.join(z.files) or 'none'})")
-            return _mesh(z["vertices"], z["simplices"], dim)
+        vertices, _ = _npz_array(path, "vertices")
+        simplices, dtype = _npz_array(path, "simplices")
+        if np.dtype(dtype).kind not in "iu":
+            raise ValueError(f"{path}: simplices: expected integer vertex indices, got dtype "
+                             f"{np.dtype(dtype)}")
+        if simplices.size and not np.all(np.abs(simplices) < 2.0**53):
+            raise ValueError(f"{path}: simplices: vertex indices out of range")
+        return _mesh(vertices, simplices.astype(np.int64), dim)
     meshio = need("meshio", extra="mesh", what=f"reading {ext or 'extensionless'} mesh files")
+    _precheck(path, ext)
+    m = _meshio_read(meshio, path)
     try:
-        m = meshio.read(path)
-    except Exception as e:  # noqa: BLE001 - meshio raises many kinds; say which file
-        raise ValueError(f"{path}: meshio cannot read it: {e}") from None
-    return _from_cells(m.points, m.cells, dim, path)
+        return _from_cells(m.points, m.cells, dim, path)
+    except (TypeError, OverflowError, MemoryError) as e:
+        raise ValueError(f"{path}: meshio read a mesh ndtrace cannot use: {e}") from None
 
 
 def read_field(path: str | os.PathLike, key: str | None = None) -> np.ndarray:
     """Reads a 3D scalar field, indexed ``[x, y, z]``, as a float64 array: ``.npy``, ``.npz``
     (the array ``key``, or its only array) or NIfTI ``.nii`` / ``.nii.gz`` through nibabel
     (``pip install "ndtrace[nifti]"``; the voxel array as stored, its affine ignored). Raises
-    FileNotFoundError for a missing file, ImportError naming the extra, ValueError otherwise."""
+    FileNotFoundError for a missing file, ImportError naming the extra, ValueError naming the
+    file otherwise (including a field too big for the memory guard)."""
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise FileNotFoundError(errno.ENOENT, "no such field file", path)
@@ -314,25 +393,24 @@ def read_field(path: str | os.PathLike, key: str | None = None) -> np.ndarray:
         nibabel = need("nibabel", extra="nifti", what="reading NIfTI fields")
         try:
             img = nibabel.load(path)
+            shape = tuple(int(k) for k in img.shape)
+            check_memory(float(np.prod(shape, dtype=np.float64)) * 8.0 * 2,
+                         f"{path}: a field of shape {shape}")
             data = np.asanyarray(img.dataobj)
-        except Exception as e:  # noqa: BLE001 - nibabel raises many kinds; say which file
-            raise ValueError(f"{path}: nibabel cannot read it: {e}") from None
+        except ValueError as e:
+            if str(e).startswith(path + ": "):
+                raise
+            raise ValueError(f"{path}: nibabel cannot read it: {str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__}") from None
+        except (Exception, SystemExit) as e:  # noqa: BLE001 - nibabel raises many kinds; say which file
+            reason = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+            raise ValueError(f"{path}: nibabel cannot read it: {reason}") from None
         if data.ndim == 4 and data.shape[3] == 1:
             data = data[..., 0]
         return field_array(path, data)
     if lower.endswith(".npy"):
-        return field_array(path, np.load(path, allow_pickle=False))
+        return field_array(path, _npz_array(path, None)[0])
     if lower.endswith(".npz"):
-        with np.load(path, allow_pickle=False) as z:
-            if key is None:
-                if len(z.files) != 1:
-                    raise ValueError(f"{path}: the .npz holds {len(z.files)} arrays "
-                                     f"({', '.join(z.files) or 'none'}): name one with key")
-                key = z.files[0]
-            if key not in z.files:
-                raise ValueError(f"{path}: the .npz has no array named {key!r} "
-                                 f"(arrays: {', '.join(z.files) or 'none'})")
-            return field_array(path, z[key])
+        return field_array(path, _npz_array(path, key)[0])
     raise ValueError(f"{path}: not a field file: expected .npy, .npz, .nii or .nii.gz")
 
 
@@ -414,3 +492,77 @@ def feature_edges(vertices, simplices, angle: float = 20.0) -> np.ndarray:
         angle_degrees(angle),
     )
     return np.asarray(out, dtype=np.int64).reshape(-1, 2)
+
+
+def _normal(normal, dim: int) -> np.ndarray:
+    n = np.asarray(normal)
+    if n.dtype.kind not in "biuf":
+        raise ValueError(f"normal: expected {dim} real numbers, got dtype {n.dtype}")
+    n = n.astype(np.float64)
+    if n.shape != (dim,):
+        raise ValueError(f"normal: expected shape ({dim},) (dim = {dim}), got {n.shape}")
+    if not np.all(np.isfinite(n)) or not np.any(n != 0):
+        raise ValueError(f"normal: must be a finite non-zero vector, got {n.tolist()}")
+    return n
+
+
+def _offset(offset) -> float:
+    if isinstance(offset, bool) or not isinstance(offset, numbers.Real):
+        raise ValueError(f"offset: expected a real number, got {offset!r}")
+    value = float(offset)
+    if not np.isfinite(value):
+        raise ValueError(f"offset: must be finite, got {offset}")
+    return value
+
+
+def slice_with_values(vertices, simplices, normal, offset, values=None):
+    """:func:`slice`, with per-vertex ``values`` (V,) interpolated at the new vertices and the
+    index of the simplex each piece was cut from: ``(vertices, simplices, basis, origin,
+    values (V',) or None, parents (S',))``."""
+    v, s = _mesh(vertices, simplices)
+    if v.shape[1] < 3:
+        raise ValueError(f"vertices: slices need N ≥ 3 (a mesh of (N−1)-simplices in R^N), "
+                         f"got shape {v.shape}")
+    n = _normal(normal, v.shape[1])
+    c = _offset(offset)
+    vals = None
+    if values is not None:
+        vals = np.ascontiguousarray(values, dtype=np.float64)
+        if vals.shape != (len(v),):
+            raise ValueError(f"values: expected shape ({len(v)},), one per vertex, got "
+                             f"{vals.shape}")
+    coords, pieces, basis, origin, out_values, parents = _ndtrace.slice_mesh(
+        v, s.astype(np.uint32), n.tolist(), c, vals)
+    return coords, pieces, basis, origin, (out_values if vals is not None else None), parents
+
+
+def slice(vertices, simplices, normal, offset) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                        np.ndarray]:
+    """The intersection of the mesh with the hyperplane ``n̂·x = offset``: ``(vertices (V', N−1),
+    simplices (S', N−1), basis (N−1, N), origin (N,))``, an (N−2)-simplex mesh in the
+    hyperplane's own orthonormal coordinates, ``x = origin + coords @ basis``.
+
+    ``normal`` (N numbers) need not be unit length; it is normalized, so ``offset`` is the
+    hyperplane's signed distance from the origin and ``origin = offset·n̂``. ``basis`` holds the
+    coordinate axes but the one most aligned with n̂, in order, made orthonormal to n̂ (for an
+    axis normal the other axes: ``normal = [0, 0, 0, 1]`` gives x, y, z).
+
+    Each simplex is cut with the course's clipping formulas (the side of each vertex from
+    eq. 1, the crossing of each edge at ``t = n̂·(x_a − x_0) / n̂·(x_a − x_b)``, eq. 10): a
+    tetrahedron gives a triangle or a quadrilateral (two triangles), an (N−1)-simplex with a
+    vertices above and b below the product Δ^{a−1}×Δ^{b−1}, cut by its staircase triangulation
+    with the vertices ordered by index, so that shared faces are cut alike and a closed mesh
+    gives a closed slice. Each piece is oriented along its simplex's normal projected into the
+    hyperplane: a closed, outward mesh gives a closed slice oriented outward in the slice.
+
+    Degenerate cuts: a vertex on the hyperplane counts as above it (the slice is the limit of
+    the slices by ``n̂·x = offset − ε``), and is one output vertex however many edges reach it;
+    pieces that collapse are dropped, and pieces with the same vertices and opposite
+    orientations cancel. So a cut along a facet gives that facet's outline, a cut that only
+    touches the mesh from outside gives nothing, and no piece is duplicated or of zero area.
+
+    Raises ValueError naming the argument for a zero, non-finite or wrongly sized ``normal``,
+    a non-finite ``offset``, and the checks of :func:`orient` on the mesh (N ≥ 3).
+    """
+    coords, pieces, basis, origin, _, _ = slice_with_values(vertices, simplices, normal, offset)
+    return coords, pieces, basis, origin

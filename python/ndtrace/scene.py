@@ -31,7 +31,7 @@ from . import _ndtrace
 from ._description import MAX_DEPTH as MAX_DEPTH, freeze_arrays, plain, plain_scene, scene_reader
 from .mesh import from_object
 
-__all__ = ["Scene", "load_file", "load_dict", "load_toml"]
+__all__ = ["Scene", "load_file", "load_dict", "load_toml", "slice_scene"]
 
 
 def _copy_tree(value: Any) -> Any:
@@ -138,6 +138,12 @@ class Scene:
         self._data.setdefault("render", {}).update(plain(options))
         return self._changed()
 
+    def set_slice(self, normal, offset: float) -> Scene:
+        """Sets ``[slice]``: the hyperplane ``n̂·x = offset`` the command line and
+        :func:`ndtrace.animate` cut the scene with (see :func:`slice_scene`)."""
+        self._data["slice"] = {"normal": plain(normal), "offset": plain(offset)}
+        return self._changed()
+
     def set_composite(self, **options) -> Scene:
         """Sets ``[composite]`` options (how the retina becomes a picture: mode, crease_angle,
         depth_cue, …; see ``docs/scene-format.md``), checked by the core when the scene is
@@ -239,3 +245,41 @@ def load_dict(data: dict, *, base: str | None = None, name: str = "<dict>") -> S
     prefixed with ``name``."""
     return Scene._from_compiled(_ndtrace.load_dict(plain_scene(data, name), name, base, scene_reader),
                                 base)
+
+
+def slice_scene(scene: Scene, normal=None, offset=None) -> Scene:
+    """The (N−1)-dimensional scene that the hyperplane ``n̂·x = offset`` cuts from ``scene``:
+    the view of 4D Toys, an N-D object passing through our space, traced and composited like
+    any scene (a 4D scene's slice is an ordinary 3D picture).
+
+    ``normal`` (N numbers) need not be unit length; ``offset`` is the hyperplane's signed
+    distance from the origin along it. Without them the scene's ``[slice]`` table is used.
+    Coordinates in the slice are those of :func:`ndtrace.mesh.slice` (for an axis normal, the
+    other axes in order). The slice scene holds each object's world-space mesh sliced (its
+    material kept, its per-vertex ``values`` interpolated; surfaces and objects the hyperplane
+    misses are left out), the lights projected into the hyperplane (a directional light along
+    the normal shines from the camera), a camera looking at the sliced objects from the N-D
+    camera's distance along its viewing direction projected into the hyperplane, and the
+    scene's background, ambient light and ``[render]`` options. Raises ValueError naming
+    ``normal`` or ``offset``.
+    """
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene: expected an ndtrace.Scene, got {type(scene).__name__}")
+    if (normal is None) != (offset is None):
+        raise ValueError("normal, offset: give both, or neither to use the scene's [slice]")
+    if normal is None:
+        compiled = scene.compiled().slice(None, 0.0)
+    else:
+        n = np.asarray(normal)
+        if n.dtype.kind not in "biuf" or n.shape != (scene.dim,):
+            raise ValueError(f"normal: expected {scene.dim} real numbers (dim = {scene.dim}), "
+                             f"got {np.asarray(normal).tolist()!r}")
+        if not np.all(np.isfinite(n)) or not np.any(n != 0):
+            raise ValueError(f"normal: must be a finite non-zero vector, got {n.tolist()}")
+        if isinstance(offset, bool) or not isinstance(offset, (int, float, np.integer,
+                                                              np.floating)):
+            raise ValueError(f"offset: expected a real number, got {offset!r}")
+        if not np.isfinite(offset):
+            raise ValueError(f"offset: must be finite, got {offset}")
+        compiled = scene.compiled().slice([float(x) for x in n], float(offset))
+    return Scene._from_compiled(compiled, scene._base)

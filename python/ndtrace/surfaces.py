@@ -13,6 +13,8 @@ import numbers
 
 import numpy as np
 
+from ._util import check_memory
+
 __all__ = ["clifford_torus", "spun_knot", "complex_graph", "riemann_root", "fermat_patch", "grid_triangles"]
 
 
@@ -20,6 +22,28 @@ def _int(name: str, value, low: int) -> int:
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or int(value) < low:
         raise ValueError(f"{name}: expected an integer ≥ {low}, got {value!r}")
     return int(value)
+
+
+#: Bytes a generator holds per vertex of its grid while it builds it (coordinates, parameter
+#: grids and their temporaries, two triangles of indices and theirs): an estimate for the memory
+#: guard.
+_BYTES_PER_VERTEX = 600.0
+
+
+def _budget(vertices: float, what: str) -> None:
+    """Refuses, before anything is built, a surface of ``vertices`` grid points too big for the
+    memory guard (a ValueError naming ``what`` and the limit)."""
+    check_memory(vertices * _BYTES_PER_VERTEX, f"{what}: a surface of {vertices:.0f} vertices")
+
+
+def _finite(vertices: np.ndarray, what: str) -> np.ndarray:
+    """``vertices``, if all are finite; else a ValueError naming the arguments ``what`` that
+    made them overflow (or NaN) and the first such vertex."""
+    bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
+    if len(bad):
+        raise ValueError(f"{what}: vertex {bad[0]} is {vertices[bad[0]].tolist()}: the surface "
+                         "must be finite (a value too large, or a function that overflows)")
+    return vertices
 
 
 def grid_triangles(rows: int, cols: int, wrap_rows: bool = False, wrap_cols: bool = False) -> np.ndarray:
@@ -38,9 +62,11 @@ def clifford_torus(samples: int = 48, radii=(2 ** -0.5, 2 ** -0.5)):
     circle."""
     n = _int("samples", samples, 3)
     r1, r2 = (float(x) for x in radii)
+    _budget(float(n) * n, f"samples = {n}")
     u, v = np.meshgrid(2 * np.pi * np.arange(n) / n, 2 * np.pi * np.arange(n) / n, indexing="ij")
-    vertices = np.stack([r1 * np.cos(u), r1 * np.sin(u), r2 * np.cos(v), r2 * np.sin(v)], -1).reshape(-1, 4)
-    return vertices, grid_triangles(n, n, True, True)
+    with np.errstate(over="ignore", invalid="ignore"):  # refused below, naming radii
+        vertices = np.stack([r1 * np.cos(u), r1 * np.sin(u), r2 * np.cos(v), r2 * np.sin(v)], -1).reshape(-1, 4)
+    return _finite(vertices, "radii"), grid_triangles(n, n, True, True)
 
 
 def _trefoil_arc(samples: int) -> tuple[np.ndarray, float]:
@@ -77,6 +103,7 @@ def spun_knot(samples: int = 96, sectors: int = 32):
     arc, ``sectors`` around; the arc's ends become the sphere's two poles."""
     n = _int("samples", samples, 8)
     k = _int("sectors", sectors, 3)
+    _budget(float(n) * k, f"samples × sectors = {n} × {k}")
     arc, floor = _trefoil_arc(n)
     inner = arc[1:-1]
     th = 2 * np.pi * np.arange(k) / k
@@ -115,9 +142,15 @@ def complex_graph(f, radius: float = 1.0, rings: int = 16, sectors: int = 48):
     """The graph {(z, f(z)) : |z| ≤ radius} ⊂ C² = R^4 of a complex function (a callable on
     complex numpy arrays), vertices (Re z, Im z, Re w, Im w); e.g. ``complex_graph(lambda z:
     z**2)``."""
-    zeta, tri = _disk(float(radius), _int("rings", rings, 1), _int("sectors", sectors, 3))
+    rings, sectors = _int("rings", rings, 1), _int("sectors", sectors, 3)
+    _budget(float(rings) * sectors, f"rings × sectors = {rings} × {sectors}")
+    with np.errstate(over="ignore", invalid="ignore"):  # refused below, naming radius
+        zeta, tri = _disk(float(radius), rings, sectors)
     w = np.asarray(f(zeta), dtype=np.complex128)
-    return _complex_vertices(zeta, w), tri
+    if w.shape != zeta.shape:
+        raise ValueError(f"f: expected one complex value per point, an array of shape {zeta.shape}, "
+                         f"got shape {w.shape}")
+    return _finite(_complex_vertices(zeta, w), "f, radius"), tri
 
 
 def riemann_root(n: int = 2, radius: float = 1.0, rings: int = 16, sectors: int = 48):
@@ -125,8 +158,12 @@ def riemann_root(n: int = 2, radius: float = 1.0, rings: int = 16, sectors: int 
     parametrised by ζ over |ζ| ≤ radius^(1/n) as (z, w) = (ζⁿ, ζ); its projection to the z plane
     winds n times around the branch point z = 0."""
     n = _int("n", n, 1)
-    zeta, tri = _disk(float(radius) ** (1 / n), _int("rings", rings, 1), _int("sectors", sectors, 3) * n)
-    return _complex_vertices(zeta**n, zeta), tri
+    rings, sectors = _int("rings", rings, 1), _int("sectors", sectors, 3)
+    _budget(float(rings) * sectors * n, f"rings × sectors × n = {rings} × {sectors} × {n}")
+    with np.errstate(over="ignore", invalid="ignore"):  # refused below, naming radius
+        zeta, tri = _disk(float(radius) ** (1 / n), rings, sectors * n)
+        vertices = _complex_vertices(zeta**n, zeta)
+    return _finite(vertices, "radius"), tri
 
 
 def fermat_patch(n: int = 3, k: int = 0, l: int = 0, samples: int = 24, extent: float = 1.0):
@@ -135,8 +172,11 @@ def fermat_patch(n: int = 3, k: int = 0, l: int = 0, samples: int = 24, extent: 
     τ = ξ + iη, 0 ≤ ξ ≤ π/2, |η| ≤ extent (then zⁿ + wⁿ = cos²τ + sin²τ = 1)."""
     n = _int("n", n, 2)
     m = _int("samples", samples, 2)
+    _budget(2.0 * m * m, f"samples = {m}")
     xi, eta = np.meshgrid(np.linspace(0, np.pi / 2, m), np.linspace(-extent, extent, 2 * m), indexing="ij")
     tau = xi + 1j * eta
-    z = np.exp(2j * np.pi * k / n) * np.cos(tau) ** (2 / n)
-    w = np.exp(2j * np.pi * l / n) * np.sin(tau) ** (2 / n)
-    return _complex_vertices(z.ravel(), w.ravel()), grid_triangles(m, 2 * m)
+    with np.errstate(over="ignore", invalid="ignore"):  # refused below, naming extent
+        z = np.exp(2j * np.pi * k / n) * np.cos(tau) ** (2 / n)
+        w = np.exp(2j * np.pi * l / n) * np.sin(tau) ** (2 / n)
+        vertices = _complex_vertices(z.ravel(), w.ravel())
+    return _finite(vertices, "extent"), grid_triangles(m, 2 * m)

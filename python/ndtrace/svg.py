@@ -14,14 +14,13 @@ from __future__ import annotations
 import base64
 import io
 import os
-import tempfile
 
 import numpy as np
 
 from . import _ndtrace, annotate
 from ._description import plain
-from ._util import c_array, float32_array
-from .composite import scene_options
+from ._util import c_array, float32_array, output_done, output_temp
+from .composite import composite, scene_options
 from .retina import Retina, trace
 from .scene import Scene
 
@@ -157,11 +156,11 @@ def write_svg(path: str | os.PathLike, scene, *, fill: bool = True, threads: int
     if not os.path.isdir(folder):
         raise OSError(f"{path}: cannot write: folder {folder} does not exist")
     text = svg_text(scene, fill=fill, threads=threads, **options)
-    fd, tmp = tempfile.mkstemp(prefix=f".{os.path.basename(path)}.tmp-", suffix=".svg", dir=folder)
+    tmp = output_temp(path, ".svg")
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
+        with open(tmp, "w", encoding="utf-8") as f:
             f.write(text)
-        os.replace(tmp, path)
+        output_done(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)

@@ -20,6 +20,7 @@ import numbers
 
 import numpy as np
 
+from ._util import check_memory
 from .geometry import generalized_cross
 
 __all__ = ["thicken_surface", "thicken_points", "surface_normal_frames"]
@@ -313,6 +314,11 @@ def thicken_surface(vertices, triangles, radius, segments=16):
     r = _radius(radius)
     m = _count("segments", segments, 3, 4096)
     t = _triangles(triangles, v)
+    # The arrays below, before any is made: per circle point its position, offset and normal
+    # frame; per prism (triangle × segment) its three tetrahedra, their corners and radial
+    # directions (the largest temporaries).
+    check_memory(len(v) * m * 4 * 8 * 4.0 + len(t) * m * 800.0,
+                 f"thicken_surface of {len(v)} vertices and {len(t)} triangles × segments = {m}")
     frames, parity = _frames(v, t)
     # 1. The circles: point id v·m + k at angle θ_k around vertex v.
     theta = 2 * np.pi * np.arange(m) / m
@@ -404,6 +410,8 @@ def thicken_points(points, radius, subdivisions=1):
     r = _radius(radius)
     k = _count("subdivisions", subdivisions, 1, 5)
     verts, tets = _sphere_template(k)
+    check_memory(len(p) * (len(verts) * 4 * 8 * 2.0 + len(tets) * 4 * 8 * 2.0),
+                 f"thicken_points of {len(p)} points × {len(verts)} vertices and {len(tets)} tetrahedra each")
     out_v = (p[:, None, :] + r * verts[None]).reshape(-1, 4)
     base = (np.arange(len(p), dtype=np.int64) * len(verts))[:, None, None]
     out_t = (base + tets[None]).reshape(-1, 4)

@@ -14,7 +14,7 @@ use ndtrace::scene::desc::ColorBy;
 use ndtrace::texture::{colormap, palette};
 use ndtrace::scene::{self, PathError};
 use ndtrace::{names, NdError};
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray4, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
@@ -191,38 +191,68 @@ fn composite<'py>(
     let extras = inp.extras();
     let pool = crate::thread_pool(threads)?;
     let frames = opts.turntable;
-    let run = || {
-        if frames == 0 {
-            core::composite_retina(inp.rgba, inp.depth, &inp.shape, &extras, &opts).map(|i| vec![i])
-        } else {
-            core::composite_turntable(inp.rgba, inp.depth, &inp.shape, &extras, &opts, frames)
-        }
-    };
-    let images = py.detach(|| {
-        guarded("composite", || match &pool {
-            Some(p) => p.install(run),
-            None => run(),
-        })
-    })?;
-    let (h, w) = (images[0].height, images[0].width);
-    let count = images.len();
-    let flat: Vec<f32> = if count == 1 {
-        images
-            .into_iter()
-            .next()
-            .map(|i| i.rgba)
-            .unwrap_or_default()
-    } else {
-        let mut flat = Vec::with_capacity(count * h * w * 4);
-        images.iter().for_each(|i| flat.extend_from_slice(&i.rgba));
-        flat
-    };
-    let array = PyArray1::from_vec(py, flat);
     if frames == 0 {
-        Ok(array.reshape([h, w, 4])?.into_any())
-    } else {
-        Ok(array.reshape([count, h, w, 4])?.into_any())
+        let run = || core::composite_retina(inp.rgba, inp.depth, &inp.shape, &extras, &opts);
+        let image = py.detach(|| {
+            guarded("composite", || match &pool {
+                Some(p) => p.install(run),
+                None => run(),
+            })
+        })?;
+        let (h, w) = (image.height, image.width);
+        return Ok(PyArray1::from_vec(py, image.rgba)
+            .reshape([h, w, 4])?
+            .into_any());
     }
+    // A turntable: the frames copied one by one into the array returned, so that they are
+    // held once (its size checked by the memory guard before it is allocated).
+    opts.validate_for(&inp.shape, inp.depth.is_some())
+        .map_err(|e| to_py_err(e.into()))?;
+    core::check_memory(&inp.shape, &opts, frames).map_err(to_py_err)?;
+    let (w, h) = opts.size;
+    let frame_len = h * w * 4;
+    let array = PyArray4::<f32>::zeros(py, [frames, h, w, 4], false);
+    {
+        let mut out = array.readwrite();
+        let flat = out
+            .as_slice_mut()
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let mut run = || {
+            core::composite_turntable_each(
+                inp.rgba,
+                inp.depth,
+                &inp.shape,
+                &extras,
+                &opts,
+                frames,
+                |k, image| flat[k * frame_len..(k + 1) * frame_len].copy_from_slice(&image.rgba),
+            )
+        };
+        py.detach(|| {
+            guarded("composite", || match &pool {
+                Some(p) => p.install(run),
+                None => run(),
+            })
+        })?;
+    }
+    Ok(array.into_any())
+}
+
+/// Checks with the core's memory guard that compositing a retina of numpy `shape` (without
+/// the channel axis) with the options of the dict fits, before anything is traced: the
+/// refusal names `size` (or `turntable`) and the limit.
+#[pyfunction]
+fn check_picture_memory(shape: Vec<usize>, options: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+    let opts = options_arg(options)?;
+    core::check_memory(&shape, &opts, opts.turntable).map_err(to_py_err)
+}
+
+/// Refuses, as a ValueError naming `what` and the limit, a request for `bytes` (an estimate)
+/// that the core's memory guard would refuse: what the Python side checks before it allocates
+/// arrays whose size comes from its input.
+#[pyfunction]
+fn check_memory(bytes: f64, what: &str) -> PyResult<()> {
+    ndtrace::memory::check(bytes, what).map_err(PyValueError::new_err)
 }
 
 /// The feature-edge pieces the illustrative picture of `options` draws (one view), as float64
@@ -424,8 +454,8 @@ fn palette_colors(name: &str) -> PyResult<Vec<[f64; 3]>> {
     })
 }
 
-/// Adds `composite`, `composite_defaults`, `check_composite`, `picture_layout`, `axis_arrows`,
-/// the colour tables and the names of the composite modes, projections, edge colourings,
+/// Adds `composite`, `composite_defaults`, `check_composite`, the memory checks
+/// (`check_picture_memory`, `check_memory`), `picture_layout`, `axis_arrows`, the colour tables and the names of the composite modes, projections, edge colourings,
 /// `color_by` values, colormaps and palettes (`COMPOSITE_MODES`, `PROJECTIONS`,
 /// `EDGE_COLOR_BY`, `COLOR_BY`, `COLORMAPS`, `PALETTES`).
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -434,6 +464,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(picture_edges, m)?)?;
     m.add_function(wrap_pyfunction!(composite_defaults, m)?)?;
     m.add_function(wrap_pyfunction!(check_composite, m)?)?;
+    m.add_function(wrap_pyfunction!(check_picture_memory, m)?)?;
+    m.add_function(wrap_pyfunction!(check_memory, m)?)?;
     m.add_function(wrap_pyfunction!(picture_layout, m)?)?;
     m.add_function(wrap_pyfunction!(axis_arrows, m)?)?;
     m.add_function(wrap_pyfunction!(colormap_table, m)?)?;

@@ -204,6 +204,49 @@ fn arcball_4d<'py>(
     run(py, a0.len() * 4, |o| batch::arcball_4d(a0, a1, b0, b1, o))
 }
 
+#[pyfunction]
+fn quaternion_spline<'py>(
+    py: Python<'py>,
+    keys: Arr<'py>,
+    times: Arr<'py>,
+    t: Arr<'py>,
+) -> Out<'py> {
+    let (k, times, t) = (flat(&keys, "keys")?, flat(&times, "times")?, flat(&t, "t")?);
+    run(py, t.len() * 4, |o| {
+        batch::quaternion_spline(k, times, t, o)
+    })
+}
+
+#[pyfunction]
+fn so4_spline<'py>(
+    py: Python<'py>,
+    left_keys: Arr<'py>,
+    right_keys: Arr<'py>,
+    times: Arr<'py>,
+    t: Arr<'py>,
+) -> Out<'py> {
+    let (l, r) = (
+        flat(&left_keys, "left_keys")?,
+        flat(&right_keys, "right_keys")?,
+    );
+    let (times, t) = (flat(&times, "times")?, flat(&t, "t")?);
+    run(py, t.len() * 16, |o| batch::so4_spline(l, r, times, t, o))
+}
+
+#[pyfunction]
+fn so_n_spline<'py>(
+    py: Python<'py>,
+    n: usize,
+    keys: Arr<'py>,
+    times: Arr<'py>,
+    t: Arr<'py>,
+) -> Out<'py> {
+    let (k, times, t) = (flat(&keys, "keys")?, flat(&times, "times")?, flat(&t, "t")?);
+    run(py, t.len() * n * n, |o| {
+        batch::so_n_spline(n, k, times, t, o)
+    })
+}
+
 /// Adds the `rotation` kernel submodule.
 pub fn register(parent: &Bound<'_, PyModule>) -> PyResult<()> {
     let m = PyModule::new(parent.py(), "rotation")?;
@@ -236,6 +279,9 @@ pub fn register(parent: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(quaternions_from_so4, &m)?)?;
     m.add_function(wrap_pyfunction!(slerp_so4, &m)?)?;
     m.add_function(wrap_pyfunction!(arcball_4d, &m)?)?;
+    m.add_function(wrap_pyfunction!(quaternion_spline, &m)?)?;
+    m.add_function(wrap_pyfunction!(so4_spline, &m)?)?;
+    m.add_function(wrap_pyfunction!(so_n_spline, &m)?)?;
     parent.add_submodule(&m)?;
     Ok(())
 }

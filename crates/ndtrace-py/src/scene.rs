@@ -82,6 +82,9 @@ impl CompiledScene {
             render: d.render.clone(),
             composite: None,
             animation: None,
+            slice: None,
+            clip: Vec::new(),
+            cap: false,
         };
         scene::to_toml(&camera_only)
             .map(|t| {
@@ -130,13 +133,15 @@ impl CompiledScene {
     }
 
     /// The camera as the compositor needs it: a dict with `orientation` (N×N row-major),
-    /// `cell` (side of a cell, at unit distance for perspective) and `perspective`.
+    /// `position`, `cell` (side of a cell, at unit distance for perspective) and
+    /// `perspective`.
     fn retina_camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         with_scene!(&self.scene, s, _N => {
             let c = &s.camera;
             let flat: Vec<f64> = c.orientation.iter().flatten().copied().collect();
             d.set_item("orientation", flat)?;
+            d.set_item("position", c.position.to_vec())?;
             d.set_item("cell", c.cell)?;
             d.set_item(
                 "perspective",
@@ -271,6 +276,25 @@ impl CompiledScene {
             scene::reused_frame(&self.desc, &self.scene, k, "<scene>").transpose()
         })?;
         Ok(frame.map(|(desc, scene)| CompiledScene { desc, scene }))
+    }
+
+    /// The (N−1)-dimensional slice of the scene by the hyperplane n̂·x = `offset`, built
+    /// (`normal` None: the scene's `[slice]`).
+    #[pyo3(signature = (normal=None, offset=0.0))]
+    fn slice(
+        &self,
+        py: Python<'_>,
+        normal: Option<Vec<f64>>,
+        offset: f64,
+    ) -> PyResult<CompiledScene> {
+        let cut = normal.map(|normal| scene::desc::SliceDesc { normal, offset });
+        py.detach(|| {
+            guarded("slice_scene", || {
+                let desc = scene::slice_scene(&self.desc, &self.scene, cut.as_ref(), "<slice>")?;
+                let scene = scene::build_desc(&desc, "<slice>", None)?;
+                Ok(CompiledScene { desc, scene })
+            })
+        })
     }
 
     /// Whether two scenes have equal descriptions.
@@ -465,11 +489,12 @@ fn load_file(
     reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
     let reader = PyMeshReader::new(reader);
-    let (desc, scene) = py.detach(|| {
+    let loaded = py.detach(|| {
         guarded("load_file", || {
             scene::load_file_with(&path, as_reader(&reader))
         })
-    })?;
+    });
+    let (desc, scene) = PyMeshReader::finish(&reader, loaded)?;
     Ok(CompiledScene { desc, scene })
 }
 
@@ -484,11 +509,12 @@ fn load_toml(
     reader: Option<Bound<'_, PyAny>>,
 ) -> PyResult<CompiledScene> {
     let reader = PyMeshReader::new(reader);
-    let (desc, scene) = py.detach(|| {
+    let loaded = py.detach(|| {
         guarded("load_toml", || {
             scene::load_toml_with(text, name, base.as_deref(), as_reader(&reader))
         })
-    })?;
+    });
+    let (desc, scene) = PyMeshReader::finish(&reader, loaded)?;
     Ok(CompiledScene { desc, scene })
 }
 
@@ -522,11 +548,12 @@ fn load_dict(
             return Ok(CompiledScene { desc, scene });
         }
     }
-    let scene = py.detach(|| {
+    let built = py.detach(|| {
         guarded("load_dict", || {
             scene::build_desc_with(&desc, name, base.as_deref(), as_reader(&reader))
         })
-    })?;
+    });
+    let scene = PyMeshReader::finish(&reader, built)?;
     Ok(CompiledScene { desc, scene })
 }
 

@@ -16,6 +16,7 @@
 /// `$then` is a path in parentheses (`($crate::some_macro)` from inside an exported macro).
 ///
 /// ```
+/// # // Run by `dim::tests::the_doc_examples_hold`.
 /// macro_rules! count {
 ///     ($what:literal ; $($n:literal $variant:ident),*) => {
 ///         ($what, [$($n),*].len())
@@ -69,12 +70,30 @@ pub fn check_dim(dim: usize) -> crate::NdResult<usize> {
     }
 }
 
+/// `value` as the type `U`, when `T` is `U` (else `value` back): code written for one
+/// dimension only — the elevation map and the surfaces live in R^4 — is compiled once, for
+/// `Foo<4>`, and reached from code generic over N after checking `N == 4`, instead of being
+/// compiled for every N of [`SUPPORTED_DIMS`].
+pub fn same<T: 'static, U: 'static>(value: T) -> Result<U, T> {
+    let mut slot = Some(value);
+    match (&mut slot as &mut dyn std::any::Any).downcast_mut::<Option<U>>() {
+        Some(u) => Ok(u.take().expect("just filled")),
+        None => Err(slot.expect("not taken")),
+    }
+}
+
+/// [`same`] for a reference.
+pub fn same_ref<T: 'static, U: 'static>(value: &T) -> Option<&U> {
+    (value as &dyn std::any::Any).downcast_ref::<U>()
+}
+
 /// Runs `$body` with `$N` bound to the compile-time constant equal to the runtime `$dim`.
 ///
 /// Evaluates to `Ok(body)` for `dim` in [`SUPPORTED_DIMS`] (2..=8) and to
 /// `Err(NdError::Dimension)` otherwise.
 ///
 /// ```
+/// # // Run by `dim::tests::the_doc_examples_hold`.
 /// use ndtrace::with_dim;
 /// let n: usize = 5;
 /// let zeros = with_dim!(n, N => [0.0f64; N].len()).unwrap();

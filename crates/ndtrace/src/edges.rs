@@ -95,7 +95,7 @@ pub fn edge_segments<const N: usize>(
                     .chain(&star[j as usize])
                     .map(|&s| first + s)
                     .collect();
-                split_edge(scene, culled, &near, &a, &b)
+                split_edge(scene, culled, &near, &a, &b, o)
                     .into_iter()
                     .map(|(s0, s1, visible)| EdgeSegment {
                         a: lerp(&a, &b, s0),
@@ -453,12 +453,27 @@ fn split_edge<const N: usize>(
     near: &[u32],
     a: &Vector<N>,
     b: &Vector<N>,
+    object: usize,
 ) -> Vec<(f64, f64, bool)> {
     let cam = &scene.camera;
-    let (v0, v1) = view_interval(cam, a, b);
+    let (mut v0, mut v1) = view_interval(cam, a, b);
     let mut pieces = Vec::new();
+    // Clip hyperplanes (`render/clip.rs`): the part of the edge beyond its object's is not
+    // there (n̂·x ≤ c along the edge: the course's segment clip, eq. 10), and occluders count
+    // only where their hits are kept. The part clipped away is dropped from the result.
+    let clipped = scene.clips.active();
+    let mut kept = (0.0, 1.0);
+    if clipped {
+        for (n, c) in &scene.clips.objects[object].planes {
+            clip(&mut kept, c - dot(n, a), -dot(n, &sub(b, a)));
+        }
+        if !(kept.0 < kept.1) {
+            return Vec::new();
+        }
+        (v0, v1) = (v0.max(kept.0), v1.min(kept.1));
+    }
     if !(v0 < v1) {
-        pieces.push((0.0, 1.0, false));
+        pieces.push((kept.0, kept.1, false));
         return pieces;
     }
     // Samples: SAMPLES_PER_CELL per retina cell of the projected length.
@@ -479,7 +494,9 @@ fn split_edge<const N: usize>(
         scene.objects[o].mesh.simplex_points(p)
     };
     for &g in near {
-        if accept(g) {
+        // (With clips, an occluder may be cut: only the sample rays, whose hits are checked,
+        // find them.)
+        if accept(g) && !clipped {
             if let Some(h) = plane.hidden_by(&simplex(g), &scene.flat_normal(g)) {
                 hidden.push(h);
             }
@@ -505,10 +522,14 @@ fn split_edge<const N: usize>(
                 }
             }
         };
-        let Some(hit) = scene
+        let first = scene
             .instances
-            .closest_hit(&ray, 0.0, 1.0 - ON_EDGE, accept)
-        else {
+            .closest_hit(&ray, 0.0, 1.0 - ON_EDGE, accept);
+        let Some(hit) = (if clipped {
+            crate::render::clip::nearest_kept(scene, &ray, 0.0, 1.0 - ON_EDGE, &accept, first)
+        } else {
+            first
+        }) else {
             continue;
         };
         if let Some(h) = plane.hidden_by(&simplex(hit.prim), &hit.normal) {
@@ -517,7 +538,7 @@ fn split_edge<const N: usize>(
     }
     // Visible = view interval minus the union of the hidden intervals.
     hidden.sort_by(|x, y| x.0.total_cmp(&y.0));
-    let mut pieces = vec![(0.0, v0, false)];
+    let mut pieces = vec![(kept.0, v0, false)];
     let mut at = v0;
     for (h0, h1) in hidden {
         let (h0, h1) = (h0.max(v0), h1.min(v1));
@@ -532,7 +553,7 @@ fn split_edge<const N: usize>(
         at = h1;
     }
     pieces.push((at, v1, true));
-    pieces.push((v1, 1.0, false));
+    pieces.push((v1, kept.1, false));
     merge(pieces)
 }
 

@@ -38,21 +38,34 @@ where
             format!("cannot write: folder {} does not exist", dir.display()),
         ));
     }
-    let name = path
-        .file_name()
-        .ok_or_else(|| file_err(path, "not a file name"))?;
+    if path.file_name().is_none() {
+        return Err(file_err(path, "not a file name"));
+    }
+    if path.is_dir() {
+        return Err(file_err(path, "cannot write: it is a folder"));
+    }
+    // A short name, whatever the destination's length (a legal 250-byte name must not make a
+    // temporary name longer than the file system allows); the extension kept last: some
+    // writers choose the format from it.
+    static SERIAL: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_string())
+        .filter(|e| e.len() <= 16)
         .unwrap_or_default();
-    // Keep the extension last: some writers choose the format from it.
     let tmp = dir.join(format!(
-        ".{}.tmp-{}.{}",
-        name.to_string_lossy(),
+        ".ndtrace-{}-{}.tmp.{ext}",
         std::process::id(),
-        ext
+        SERIAL.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
-    let result = write(&tmp).and_then(|_| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
+    // The temporary file is created with the mode the umask gives; a file it replaces keeps
+    // its own mode.
+    let result = write(&tmp)
+        .and_then(|_| match std::fs::metadata(path) {
+            Ok(old) => std::fs::set_permissions(&tmp, old.permissions()).map_err(|e| e.to_string()),
+            Err(_) => Ok(()),
+        })
+        .and_then(|_| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
     if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);
         return Err(file_err(path, format!("cannot write: {e}")));

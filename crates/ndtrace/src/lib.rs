@@ -10,6 +10,7 @@
 //! that turns a runtime dimension into a compile-time one is the [`with_dim!`] macro.
 //!
 //! ```
+//! # // Run by `geometry::tests::the_crate_doc_example_holds`.
 //! use ndtrace::geometry::{generalized_cross, signed_volume};
 //! // The edges e_1, e_2, e_3 of R^4 give +e_4 (eq. 6).
 //! let n = generalized_cross::<4>(&[[1., 0., 0., 0.], [0., 1., 0., 0.], [0., 0., 1., 0.]]);
@@ -35,6 +36,7 @@ pub mod linalg;
 pub mod memory;
 pub mod mesh;
 pub mod names;
+pub mod par;
 pub mod ray;
 pub mod render;
 pub mod rotation;

@@ -37,11 +37,11 @@ pub enum Source {
 impl Source {
     fn describe(self) -> &'static str {
         match self {
-            Source::System => "free system memory",
-            Source::AddressSpace => "under the address-space limit RLIMIT_AS (ulimit -v)",
-            Source::Data => "under the data-segment limit RLIMIT_DATA (ulimit -d)",
-            Source::Cgroup => "under the cgroup's memory limit (memory.max)",
-            Source::Cap => "under NDTRACE_MEMORY_LIMIT",
+            Source::System => "of free system memory",
+            Source::AddressSpace => "left under the address-space limit RLIMIT_AS (ulimit -v)",
+            Source::Data => "left under the data-segment limit RLIMIT_DATA (ulimit -d)",
+            Source::Cgroup => "left under the cgroup's memory limit (memory.max)",
+            Source::Cap => "allowed by NDTRACE_MEMORY_LIMIT",
         }
     }
 }
@@ -193,16 +193,18 @@ pub fn human_bytes(b: f64) -> String {
 
 /// Refuses `bytes` (an estimate; f64 so that any product of counts fits) for `what` ("a
 /// retina of 8000000 cells") when it is more than the process can spare: the error is one
-/// line, "`what` needs about 3.0 GiB of memory, more than this process can spare (1.2 GiB
-/// free system memory)"; the caller adds where.
+/// line, "`what` needs about 3.0 GiB of memory, more than this process can spare (600.0 MiB:
+/// half of the 1.2 GiB of free system memory)"; the caller adds where.
 pub fn check(bytes: f64, what: &str) -> Result<(), String> {
     let (avail, source) = available();
-    if bytes.is_finite() && bytes <= avail as f64 * SPARE_FRACTION {
+    let spare = avail as f64 * SPARE_FRACTION;
+    if bytes.is_finite() && bytes <= spare {
         return Ok(());
     }
     Err(format!(
-        "{what} needs about {} of memory, more than this process can spare ({} {})",
+        "{what} needs about {} of memory, more than this process can spare ({}: half of the {} {})",
         human_bytes(bytes),
+        human_bytes(spare),
         human_bytes(avail as f64),
         source.describe()
     ))

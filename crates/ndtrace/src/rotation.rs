@@ -714,5 +714,7 @@ pub fn arcball_4d(a0: &Quat, a1: &Quat, b0: &Quat, b1: &Quat) -> Matrix<4> {
     so4_from_quaternions(&q, &p)
 }
 
+pub mod spline;
+
 #[cfg(test)]
 mod tests;

@@ -16,7 +16,7 @@ import os
 import sys
 import traceback
 
-from .._command import UsageError, apply_sets, ints, load_scene
+from .._command import UsageError, apply_sets, capped_threads, ints, load_scene
 from .._ndtrace import __version__
 from .._optional import need
 from .server import serve
@@ -50,8 +50,7 @@ def run(argv: list[str]) -> int:
     args = _parser().parse_args(argv)
     if not 0 <= args.port <= 65535:
         raise UsageError(f"--port: expected 0 (any free port) to 65535, got {args.port}")
-    if args.threads is not None and args.threads < 1:
-        raise UsageError(f"--threads: must be at least 1, got {args.threads}")
+    args.threads = capped_threads(args.threads, "ndtrace view")
     if args.draft_cells is not None and args.draft_cells < 1:
         raise UsageError(f"--draft-cells: must be at least 1, got {args.draft_cells}")
     size = None

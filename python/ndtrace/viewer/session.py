@@ -15,7 +15,9 @@ import dataclasses
 import importlib
 import inspect
 import io
+import json
 import math
+import re
 import time
 import tomllib
 from collections.abc import Callable
@@ -23,16 +25,20 @@ from typing import Any
 
 import numpy as np
 
+from .._ndtrace import check_picture_memory
+from .._util import check_memory
 from ..composite import composite, picture_size, scene_options
 from ..display import camera_resolution, reduced_resolution
 from ..files import to_srgb8
 from ..retina import Retina, trace
-from ..scene import Scene, load_dict
+from ..scene import Scene, load_dict, slice_scene
+from ..slicing import at_size, slice_options
 from . import controls
 from .worker import DRAFT, FULL, Superseded
 
-__all__ = ["ViewSession", "Snapshot", "composite_modes", "display_aids", "BASE_KEYWORDS",
-           "DRAFT_CELLS", "DRAFT_SCALE", "DRAFT_STEP"]
+__all__ = ["ViewSession", "Snapshot", "composite_modes", "display_aids", "parse_message", "nesting",
+           "BASE_KEYWORDS", "DRAFT_CELLS", "DRAFT_SCALE", "DRAFT_STEP", "MAX_MESSAGE_BYTES",
+           "MAX_NESTING", "UNSETTABLE"]
 
 #: Retina cells of a draft frame (traced while the mouse moves): 32³ for a 4D scene.
 DRAFT_CELLS: int = 32 ** 3
@@ -53,6 +59,76 @@ BASE_KEYWORDS = frozenset({
 })
 
 _ZOOM_RANGE = (0.05, 50.0)
+
+#: The longest message a page may send (UTF-8 bytes): its messages are a few hundred bytes, a
+#: drag's batch of mouse steps a few kilobytes.
+MAX_MESSAGE_BYTES: int = 1 << 16
+
+#: The deepest nesting of lists and objects in a message, and of a TOML value in ``set`` (a
+#: rotation matrix is two levels inside the message, a cutaway's centre three).
+MAX_NESTING: int = 16
+
+#: The keywords of ``ndtrace.composite`` that ``set`` refuses: what the server decides (the
+#: picture's size, the threads), what is not one picture (a turntable's frames), the retina.
+UNSETTABLE = frozenset({"retina", "threads", "size", "turntable"})
+
+_JSON_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
+_TOML_STRING = re.compile(r'"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'')
+
+
+def nesting(text: str, strings: re.Pattern = _JSON_STRING) -> int:
+    """The deepest nesting of brackets (``[`` and ``{``) in JSON or TOML ``text``, not counting
+    those inside strings: checked before a parser that recurses sees the text."""
+    bare = strings.sub('""', text).encode("utf-8", "replace")
+    codes = np.frombuffer(bare, dtype=np.uint8)
+    if not len(codes):
+        return 0
+    step = (np.isin(codes, (0x5B, 0x7B)).astype(np.int32)
+            - np.isin(codes, (0x5D, 0x7D)).astype(np.int32))
+    return int(max(0, np.cumsum(step).max()))
+
+
+def _depth_exceeds(value: Any, limit: int) -> bool:
+    """Whether ``value`` (JSON data: dicts, lists, scalars) nests deeper than ``limit``."""
+    stack = [(value, 0)]
+    while stack:
+        v, d = stack.pop()
+        if isinstance(v, dict):
+            v = list(v.values())
+        if isinstance(v, list):
+            if d + 1 > limit:
+                return True
+            stack.extend((x, d + 1) for x in v)
+    return False
+
+
+def _refuse_constant(name: str) -> float:
+    raise ValueError(f"message: {name} is not a JSON number")
+
+
+def parse_message(text: str | bytes) -> dict:
+    """A page's message, checked before it is parsed: at most :data:`MAX_MESSAGE_BYTES` bytes,
+    lists and objects nested at most :data:`MAX_NESTING` deep, valid JSON (without NaN or
+    Infinity), an object. Anything else is a ValueError saying what is wrong."""
+    size = len(text.encode("utf-8", "replace") if isinstance(text, str) else text)
+    if size > MAX_MESSAGE_BYTES:
+        raise ValueError(f"message: {size} bytes, more than the {MAX_MESSAGE_BYTES} allowed")
+    if isinstance(text, bytes):
+        try:
+            text = text.decode("utf-8")
+        except UnicodeDecodeError:
+            raise ValueError("message: not UTF-8 text") from None
+    if nesting(text) > MAX_NESTING:
+        raise ValueError(f"message: nested more than {MAX_NESTING} levels deep")
+    try:
+        data = json.loads(text, parse_constant=_refuse_constant)
+    except RecursionError:
+        raise ValueError(f"message: nested more than {MAX_NESTING} levels deep") from None
+    except ValueError as e:  # json.JSONDecodeError is a ValueError
+        raise ValueError(f"message: not JSON: {e}") from None
+    if not isinstance(data, dict):
+        raise ValueError("message: expected an object with a 'type'")
+    return data
 
 # The module, not the function ``ndtrace.composite`` that the package's attribute names.
 _composite_module = importlib.import_module("ndtrace.composite")
@@ -116,6 +192,25 @@ def _jsonable(value: Any) -> Any:
     return repr(value)
 
 
+def _numbers(objects: Any) -> int:
+    """About how many numbers the arrays of a description's objects hold (numpy arrays by
+    their size, lists of rows by rows × the first row's length)."""
+    count = 0
+    for o in objects if isinstance(objects, list) else []:
+        for v in (o.values() if isinstance(o, dict) else []):
+            if isinstance(v, np.ndarray):
+                count += v.size
+            elif isinstance(v, list) and v:
+                first = v[0]
+                count += len(v) * (len(first) if isinstance(first, list) else 1)
+    return count
+
+
+def camera_shape(resolution: list[int]) -> list[int]:
+    """The numpy shape of a retina of ``resolution`` (retina axes u_1 … u_{N−1}): reversed."""
+    return list(reversed([int(r) for r in resolution]))
+
+
 @dataclasses.dataclass(frozen=True)
 class Snapshot:
     """What a frame shows: the object rotation and the composite options, frozen at an input."""
@@ -123,6 +218,7 @@ class Snapshot:
     seq: int
     rotation: np.ndarray
     options: dict
+    slice: float | None = None
 
 
 def draft_resolution(resolution: list[int], cells: int = DRAFT_CELLS) -> list[int]:
@@ -171,13 +267,22 @@ class ViewSession:
         self.draft_scale = float(draft_scale)
         self.threads = threads
         initial = scene_options(desc)
+        initial.pop("turntable", None)  # a view is one picture
         shape = list(reversed(self.resolution))
         picture = size or initial.get("size") or picture_size(shape, initial)
         self.size = (int(picture[0]), int(picture[1]))
         initial["size"] = list(self.size)
+        # The full frame's picture, checked by the memory guard before the server starts.
+        check_picture_memory(list(camera_shape(self.resolution)), {
+            k: v for k, v in _jsonable(initial).items() if k in ("size", "mode")})
         self.initial_options = initial
         self.options = dict(initial)
         self.rotation = np.eye(self.dim)
+        # Slice mode: the offset of the hyperplane x_{N−1} = offset the page shows the scene's
+        # slice by (None: off). The rolling ball turns the objects through it, i.e. turns the
+        # hyperplane by the inverse rotation in the objects' frame.
+        self.slice: float | None = None
+        self.slice_normal = [0.0] * (self.dim - 1) + [1.0]
         self.seq = 0
         self._arcball: tuple[np.ndarray, np.ndarray, bool] | None = None
         self._retina: tuple[bytes, str, Retina] | None = None  # the last traced retina
@@ -194,7 +299,7 @@ class ViewSession:
             **self.state(), "type": "hello", "scene": self.name, "dim": self.dim, "picture": list(self.size),
             "radius": self.radius, "modes": list(self.modes) if self.dim >= 4 else [],
             "mode_default": self._mode_default, "aids": self.aids,
-            "arcball": self.dim == 4, "orbit": self.dim >= 4,
+            "arcball": self.dim == 4, "orbit": self.dim >= 4, "slices": self.dim >= 4,
             "resolution": self.resolution, "draft": self.draft,
         }
 
@@ -206,10 +311,10 @@ class ViewSession:
 
     def state(self) -> dict:
         return {"type": "state", "seq": self.seq, "rotation": self.rotation.tolist(),
-                "options": _jsonable(self.options)}
+                "options": _jsonable(self.options), "slice": self.slice}
 
     def snapshot(self) -> Snapshot:
-        return Snapshot(self.seq, self.rotation.copy(), dict(self.options))
+        return Snapshot(self.seq, self.rotation.copy(), dict(self.options), self.slice)
 
     # -- inputs --------------------------------------------------------------------------
     def handle(self, msg: dict) -> tuple[dict | None, str | None]:
@@ -219,6 +324,8 @@ class ViewSession:
         frame now) or None. A bad message raises ValueError (the page shows it; the state is unchanged)."""
         if not isinstance(msg, dict) or not isinstance(msg.get("type"), str):
             raise ValueError("message: expected an object with a 'type'")
+        if _depth_exceeds(msg, MAX_NESTING):
+            raise ValueError(f"message: nested more than {MAX_NESTING} levels deep")
         kind = msg["type"]
         seq = msg.get("seq")
         if seq is not None:
@@ -298,17 +405,23 @@ class ViewSession:
         kinds = {a["name"]: a["kind"] for a in self.aids}
         params = _parameters()
         for key, value in given.items():
-            if key not in params or key in ("retina", "threads", "size"):
+            if key not in params or key in UNSETTABLE:
                 raise ValueError(f"set.options.{key}: not a keyword of ndtrace.composite the page can set")
             if kinds.get(key) == "text" and isinstance(value, str):
                 text = value.strip()
                 if not text:
                     options.pop(key, None)
                     continue
+                if nesting(text, _TOML_STRING) > MAX_NESTING:
+                    raise ValueError(f"{key}: nested more than {MAX_NESTING} levels deep")
                 try:
                     value = tomllib.loads(f"v = {text}")["v"]
                 except tomllib.TOMLDecodeError as e:
                     raise ValueError(f"{key}: expected a TOML value, e.g. [0, 0, 1] or {{ a = 1 }}: {e}") from None
+                except RecursionError:
+                    raise ValueError(f"{key}: nested more than {MAX_NESTING} levels deep") from None
+                if _depth_exceeds(value, MAX_NESTING):
+                    raise ValueError(f"{key}: nested more than {MAX_NESTING} levels deep")
             if value is None:
                 options.pop(key, None)
             else:
@@ -318,15 +431,29 @@ class ViewSession:
         return "draft"
 
     def _check_options(self, options: dict) -> None:
-        """Raises the composite's own ValueError for options it refuses (on a tiny retina)."""
-        if self.dim < 3:
-            return
+        """Raises the composite's own ValueError for options it refuses (on a tiny retina of
+        this scene's dimension: the same checks for every dimension), and the memory guard's
+        for a picture that would not fit."""
         shape = (2,) * (self.dim - 1)
         probe = Retina(dim=self.dim, rgba=np.zeros(shape + (4,), np.float32),
                        depth=np.full(shape, np.inf, np.float32),
                        normal=np.zeros(shape + (self.dim,), np.float32),
                        object_id=np.full(shape, -1, np.int32), primitive_id=np.full(shape, -1, np.int64))
         composite(probe, **dict(options, size=(2, 2)))
+        for key, value in options.items():
+            if isinstance(value, float) and not math.isfinite(value):  # a reply must be JSON
+                raise ValueError(f"{key}: must be finite, got {value}")
+
+    def _on_slice(self, msg: dict) -> str:
+        """``{"type": "slice", "on": bool, "offset": number}``: slice mode on at that offset of
+        the hyperplane x_{N−1} = offset (the last axis), or off."""
+        if self.dim < 4:
+            raise ValueError(f"slice: slice mode needs dim ≥ 4 (a 3D slice or more), got {self.dim}")
+        on = msg.get("on", True)
+        if not isinstance(on, bool):
+            raise ValueError(f"slice.on: expected true or false, got {on!r}")
+        self.slice = self._number(msg, "offset") if on else None
+        return "now"
 
     def _on_rotation(self, msg: dict) -> str:
         self.rotation = controls.check_rotation(msg.get("matrix"), self.dim)
@@ -339,6 +466,7 @@ class ViewSession:
     def _on_reset(self, msg: dict) -> str:
         self.rotation = np.eye(self.dim)
         self.options = dict(self.initial_options)
+        self.slice = None
         return "now"
 
     def _on_release(self, msg: dict) -> str:
@@ -368,13 +496,20 @@ class ViewSession:
         marching step of at least :data:`DRAFT_STEP`, full ones as PNG. Returns the frame's
         metadata and the encoded picture."""
         t0 = time.perf_counter()
-        key = snap.rotation.tobytes()
+        key = snap.rotation.tobytes() + repr(snap.slice).encode()
         cached = self._retina
         timings: dict[str, float] = {}
         if cached is not None and cached[0] == key and (cached[1] == FULL or quality == DRAFT):
             retina, traced = cached[2], cached[1]
         else:
             scene = self.frame_scene(snap.rotation, quality)
+            if snap.slice is not None:
+                # Slice mode: the (N−1)-D slice of the turned scene, a 3D one at the picture's
+                # resolution (its retina is the picture).
+                w, h = self.size
+                if quality == DRAFT:
+                    w, h = max(1, round(w * self.draft_scale)), max(1, round(h * self.draft_scale))
+                scene = at_size(slice_scene(scene, self.slice_normal, snap.slice), (w, h))
             t1 = time.perf_counter()
             timings["build"] = (t1 - t0) * 1e3
 
@@ -392,6 +527,8 @@ class ViewSession:
         options = dict(snap.options)
         if "axes_frame" in _parameters() and self.dim >= 3:  # the glyph turns with the object
             options["axes_frame"] = snap.rotation.tolist()
+        if snap.slice is not None:
+            options = slice_options(options, retina.dim)
         if quality == DRAFT:
             w, h = self.size
             options["size"] = (max(1, round(w * self.draft_scale)), max(1, round(h * self.draft_scale)))
@@ -443,6 +580,10 @@ class ViewSession:
         ``{ matrix = … }`` step appended to each ``transform``) and the ``[composite]`` table of
         the page's options. ``ndtrace FILE -o out.png`` renders what the page shows (options
         that this ndtrace's ``[composite]`` table cannot hold are listed in a comment)."""
+        # The text is about 25 bytes per number of the objects' arrays, made once as TOML and
+        # once more as the JSON of the reply.
+        check_memory(_numbers(self._desc.get("objects", [])) * 25.0 * 3 + (1 << 20),
+                     "the view as TOML")
         table, refused = self.composite_table()
         scene = self.frame_scene(self.rotation, FULL, options=table)
         center = [float(c) for c in self.center]

@@ -75,9 +75,10 @@ def _widget_class():
         def _on_message(self, _widget, content, buffers) -> None:
             try:
                 reply, frame = self._session.handle(content)
-            except ValueError as e:
+            except (ValueError, TypeError, OverflowError, RecursionError, MemoryError) as e:
                 seq = content.get("seq") if isinstance(content, dict) else None
-                self.send({"type": "error", "seq": seq, "message": str(e)})
+                seq = seq if isinstance(seq, int) and not isinstance(seq, bool) else None
+                self.send({"type": "error", "seq": seq, "message": (str(e) or type(e).__name__).splitlines()[0]})
                 return
             if reply is not None:
                 self.send(reply)

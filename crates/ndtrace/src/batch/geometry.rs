@@ -10,7 +10,6 @@ use super::{as_vectors, batch_len, check_len};
 use crate::geometry::{self, Degenerate};
 use crate::linalg::Vector;
 use crate::{with_dim, NdError, NdResult};
-use rayon::prelude::*;
 
 /// What to do with a degenerate item (zero-volume simplex, parallel ray or segment).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -23,21 +22,33 @@ pub enum OnDegenerate {
 
 /// Runs `f(i, out_i)` for every item in parallel; a degenerate item is filled with NaN and,
 /// under [`OnDegenerate::Error`], the first one (by index) becomes the error.
-fn run_items<F>(arg: &str, out: &mut [f64], width: usize, on: OnDegenerate, f: F) -> NdResult<()>
-where
-    F: Fn(usize, &mut [f64]) -> Result<(), Degenerate> + Sync,
-{
-    let first = out
-        .par_chunks_mut(width)
-        .enumerate()
-        .filter_map(|(i, o)| match f(i, o) {
-            Ok(()) => None,
-            Err(d) => {
-                o.fill(f64::NAN);
-                Some((i, d))
+fn run_items(
+    arg: &str,
+    out: &mut [f64],
+    width: usize,
+    on: OnDegenerate,
+    f: &(dyn Fn(usize, &mut [f64]) -> Result<(), Degenerate> + Sync),
+) -> NdResult<()> {
+    // The first degenerate item of each run of items, then of all: the least index.
+    let first = crate::par::reduce_chunks_mut(
+        out,
+        (width, 1),
+        None,
+        |start, chunk| {
+            let mut first = None;
+            for (k, o) in chunk.chunks_mut(width).enumerate() {
+                if let Err(d) = f(start + k, o) {
+                    o.fill(f64::NAN);
+                    first = first.or(Some((start + k, d)));
+                }
             }
-        })
-        .min_by_key(|&(i, _)| i);
+            first
+        },
+        |a, b| match (a, b) {
+            (Some(a), Some(b)) => Some(if a.0 < b.0 { a } else { b }),
+            (a, b) => a.or(b),
+        },
+    );
     match (first, on) {
         (Some((index, d)), OnDegenerate::Error) => {
             // A degenerate simplex is the fault of `points`; a parallel direction of `arg`.
@@ -62,7 +73,7 @@ pub fn generalized_cross(dim: usize, edges: &[f64], out: &mut [f64]) -> NdResult
         let b = batch_len("edges", edges, (N - 1) * N, "(N−1, N)")?;
         check_len("out", out, N, b, "(N,)")?;
         let e = as_vectors::<N>(edges);
-        run_items("edges", out, N, OnDegenerate::Nan, |i, o| {
+        run_items("edges", out, N, OnDegenerate::Nan, &|i, o| {
             o.copy_from_slice(&geometry::generalized_cross(&e[i * (N - 1)..(i + 1) * (N - 1)]));
             Ok(())
         })
@@ -75,7 +86,7 @@ pub fn signed_volume(dim: usize, points: &[f64], out: &mut [f64]) -> NdResult<()
         let b = batch_len("points", points, (N + 1) * N, "(N+1, N)")?;
         check_len("out", out, 1, b, "()")?;
         let p = as_vectors::<N>(points);
-        run_items("points", out, 1, OnDegenerate::Nan, |i, o| {
+        run_items("points", out, 1, OnDegenerate::Nan, &|i, o| {
             o[0] = geometry::signed_volume(&p[i * (N + 1)..(i + 1) * (N + 1)]);
             Ok(())
         })
@@ -100,7 +111,7 @@ pub fn gram_volume(dim: usize, k: usize, points: &[f64], out: &mut [f64]) -> NdR
         let b = batch_len("points", points, (k + 1) * N, "(K+1, N)")?;
         check_len("out", out, 1, b, "()")?;
         let p = as_vectors::<N>(points);
-        run_items("points", out, 1, OnDegenerate::Nan, |i, o| {
+        run_items("points", out, 1, OnDegenerate::Nan, &|i, o| {
             o[0] = geometry::gram_volume(&p[i * (k + 1)..(i + 1) * (k + 1)]);
             Ok(())
         })
@@ -113,7 +124,7 @@ pub fn hyperplane(dim: usize, points: &[f64], out: &mut [f64], on: OnDegenerate)
         let b = batch_len("points", points, N * N, "(N, N)")?;
         check_len("out", out, N + 1, b, "(N+1,)")?;
         let p = as_vectors::<N>(points);
-        run_items("points", out, N + 1, on, |i, o| {
+        run_items("points", out, N + 1, on, &|i, o| {
             let h = geometry::hyperplane(&p[i * N..(i + 1) * N])?;
             o[..N].copy_from_slice(&h.normal);
             o[N] = h.offset;
@@ -136,7 +147,7 @@ pub fn point_hyperplane_distance(
         check_len("x", x, N, b, "(N,)")?;
         check_len("out", out, N + 1, b, "(N+1,)")?;
         let (xs, p) = (as_vectors::<N>(x), as_vectors::<N>(points));
-        run_items("points", out, N + 1, on, |i, o| {
+        run_items("points", out, N + 1, on, &|i, o| {
             let (h, foot) = geometry::point_hyperplane_distance(&xs[i], &p[i * N..(i + 1) * N])?;
             o[0] = h;
             o[1..].copy_from_slice(&foot);
@@ -162,7 +173,7 @@ pub fn barycentric(
         check_len("x", x, N, b, "(N,)")?;
         check_len("out", out, k + 1, b, "(K+1,)")?;
         let (xs, p) = (as_vectors::<N>(x), as_vectors::<N>(points));
-        run_items("points", out, k + 1, on, |i, o| {
+        run_items("points", out, k + 1, on, &|i, o| {
             geometry::barycentric(&xs[i], &p[i * (k + 1)..(i + 1) * (k + 1)], o)
         })
     })?
@@ -175,7 +186,7 @@ pub fn side(dim: usize, x: &[f64], points: &[f64], out: &mut [f64]) -> NdResult<
         check_len("x", x, N, b, "(N,)")?;
         check_len("out", out, 1, b, "()")?;
         let (xs, p) = (as_vectors::<N>(x), as_vectors::<N>(points));
-        run_items("points", out, 1, OnDegenerate::Nan, |i, o| {
+        run_items("points", out, 1, OnDegenerate::Nan, &|i, o| {
             o[0] = f64::from(geometry::side(&xs[i], &p[i * N..(i + 1) * N]));
             Ok(())
         })
@@ -197,7 +208,7 @@ pub fn clip_segment(
         check_len("b", b, N, n, "(N,)")?;
         check_len("out", out, 1, n, "()")?;
         let (av, bv, p) = (as_vectors::<N>(a), as_vectors::<N>(b), as_vectors::<N>(points));
-        run_items("segment", out, 1, on, |i, o| {
+        run_items("segment", out, 1, on, &|i, o| {
             o[0] = geometry::clip_segment(&av[i], &bv[i], &p[i * N..(i + 1) * N])?;
             Ok(())
         })
@@ -219,7 +230,7 @@ pub fn ray_hyperplane(
         check_len("direction", direction, N, n, "(N,)")?;
         check_len("out", out, 1, n, "()")?;
         let (c, d, p) = (as_vectors::<N>(origin), as_vectors::<N>(direction), as_vectors::<N>(points));
-        run_items("ray", out, 1, on, |i, o| {
+        run_items("ray", out, 1, on, &|i, o| {
             o[0] = geometry::ray_hyperplane(&c[i], &d[i], &p[i * N..(i + 1) * N])?;
             Ok(())
         })
@@ -238,7 +249,7 @@ pub fn transform_normal(
         check_len("normal", normal, N, b, "(N,)")?;
         check_len("out", out, N, b, "(N,)")?;
         let (m, nv) = (as_vectors::<N>(matrix), as_vectors::<N>(normal));
-        run_items("matrix", out, N, OnDegenerate::Nan, |i, o| {
+        run_items("matrix", out, N, OnDegenerate::Nan, &|i, o| {
             let mi: [Vector<N>; N] = std::array::from_fn(|r| m[i * N + r]);
             o.copy_from_slice(&geometry::transform_normal(&mi, &nv[i]));
             Ok(())

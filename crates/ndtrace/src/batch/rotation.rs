@@ -407,5 +407,62 @@ pub fn arcball_4d(a0: &[f64], a1: &[f64], b0: &[f64], b1: &[f64], out: &mut [f64
     Ok(())
 }
 
+/// [`spline::quaternion_spline`] through unit `keys` `(K, 4)` at `times` `(K,)`, at every t →
+/// `(T, 4)`.
+pub fn quaternion_spline(keys: &[f64], times: &[f64], ts: &[f64], out: &mut [f64]) -> NdResult<()> {
+    finite("t", ts)?;
+    batch_len("keys", keys, 4, "(K, 4)")?;
+    unit_items("keys", keys, 4, "quaternion")?;
+    check_len("out", out, 4, ts.len(), "(4,)")?;
+    let q = rotation::spline::quaternion_spline(as_quats(keys), times, ts, true)?;
+    out.copy_from_slice(q.as_flattened());
+    Ok(())
+}
+
+/// [`spline::so4_spline`] through unit quaternion pairs `left`, `right` `(K, 4)` at `times`,
+/// at every t → `(T, 4, 4)`.
+pub fn so4_spline(
+    left: &[f64],
+    right: &[f64],
+    times: &[f64],
+    ts: &[f64],
+    out: &mut [f64],
+) -> NdResult<()> {
+    finite("t", ts)?;
+    batch_len("left_keys", left, 4, "(K, 4)")?;
+    batch_len("right_keys", right, 4, "(K, 4)")?;
+    unit_items("left_keys", left, 4, "quaternion")?;
+    unit_items("right_keys", right, 4, "quaternion")?;
+    check_len("out", out, 16, ts.len(), "(4, 4)")?;
+    let m = rotation::spline::so4_spline(as_quats(left), as_quats(right), times, ts)?;
+    for (o, m) in as_matrices_mut::<4>(out).iter_mut().zip(m) {
+        *o = m;
+    }
+    Ok(())
+}
+
+/// [`spline::so_n_spline`] through rotations `keys` `(K, N, N)` at `times`, at every t →
+/// `(T, N, N)`.
+pub fn so_n_spline(
+    dim: usize,
+    keys: &[f64],
+    times: &[f64],
+    ts: &[f64],
+    out: &mut [f64],
+) -> NdResult<()> {
+    finite("t", ts)?;
+    with_dim!(dim, N => {
+        batch_len("keys", keys, N * N, "(K, N, N)")?;
+        check_len("out", out, N * N, ts.len(), "(N, N)")?;
+        let k = as_matrices::<N>(keys);
+        check_rotations("keys", N, keys)?;
+        let m = rotation::spline::so_n_spline(k, times, ts)?;
+        for (o, m) in as_matrices_mut::<N>(out).iter_mut().zip(m) {
+            *o = m;
+        }
+    })?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests;

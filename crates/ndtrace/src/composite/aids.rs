@@ -57,6 +57,26 @@ pub enum ViewLayout {
     /// azimuth − [`stereo_angle`](super::CompositeOptions::stereo_angle)/2, the right half
     /// from azimuth + stereo_angle/2.
     Stereo,
+    /// The view (left half) beside the scene's current `[slice]` (right half): `ndtrace` (the
+    /// command line) and `ndtrace.animate` trace the slice and draw it there, and mark the
+    /// slicing hyperplane in the view; the compositor alone leaves the right half background.
+    Slice,
+}
+
+/// `cubes = { size = s }`: the notes' display aid "break into tiny cubes — to help see inside
+/// volume, leave a little space instead of transparency": each occupied retina cell (coverage
+/// ≥ ½) drawn as an opaque cube of side s cells about its centre, in the cell's colour, its
+/// faces shaded by a headlight so the cubes read as solids.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cubes {
+    /// The cube's side, a fraction of a cell in (0, 1] (default 0.6).
+    #[serde(default = "default_cube_size")]
+    pub size: f64,
+}
+
+fn default_cube_size() -> f64 {
+    0.6
 }
 
 impl Cutaway {

@@ -46,7 +46,7 @@ pub struct Rect {
 pub struct Panel {
     /// Where the view or section is drawn.
     pub rect: Rect,
-    /// Its title (`"volume"`, `"x = 0.10"`, `"left eye"` …), if it has one.
+    /// Its title (`"volume"`, `"x = 0.10"`, `"left"` …), if it has one.
     pub title: Option<String>,
     /// The band above `rect` the title is written in (with a title).
     pub title_band: Option<Rect>,
@@ -104,7 +104,7 @@ pub fn picture_size(opts: &CompositeOptions, m: usize) -> (usize, usize) {
         return opts.size;
     }
     match opts.layout {
-        ViewLayout::Single => opts.size,
+        ViewLayout::Single | ViewLayout::Slice => opts.size,
         ViewLayout::Sections => SECTIONS_SIZE,
         ViewLayout::Stereo => STEREO_SIZE,
     }
@@ -207,9 +207,15 @@ pub fn picture_layout(
             let wl = area.w / 2;
             let half = |x: usize, w: usize| Rect { x, w, ..area };
             vec![
-                titled(half(0, wl), Some("left eye".into())),
-                titled(half(wl, area.w - wl), Some("right eye".into())),
+                titled(half(0, wl), Some("left".into())),
+                titled(half(wl, area.w - wl), Some("right".into())),
             ]
+        }
+        // The view beside the slice (drawn by whoever traces it), untitled.
+        ViewLayout::Slice => {
+            let wl = area.w / 2;
+            let half = |x: usize, w: usize| Rect { x, w, ..area };
+            vec![titled(half(0, wl), None), titled(half(wl, area.w - wl), None)]
         }
         ViewLayout::Sections => {
             let (wl, ht) = (area.w / 2, area.h / 2);

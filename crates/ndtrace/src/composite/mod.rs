@@ -44,6 +44,7 @@
 
 mod aids;
 pub mod annotate;
+mod cubes;
 pub mod illustrative;
 mod montage;
 mod options;
@@ -52,7 +53,7 @@ mod stages;
 mod view;
 mod volume;
 
-pub use aids::{Cutaway, ViewLayout};
+pub use aids::{Cubes, Cutaway, ViewLayout};
 pub use illustrative::RetinaCamera;
 pub use montage::{slice_layout, Layout, SEPARATOR};
 pub use annotate::{axis_arrows, picture_layout, AxisArrow, Panel, PictureLayout, Rect};
@@ -141,6 +142,7 @@ pub fn composite_retina(
     let cells = check_retina(rgba, depth, shape)?;
     check_extras(extras, cells, shape.len())?;
     opts.validate_for(shape, depth.is_some())?;
+    check_memory(shape, opts, 0)?;
     let m = shape.len();
     let layout = picture_layout(opts, shape, extras.legend_rows, None);
     let (w, h) = layout.size;
@@ -236,36 +238,102 @@ pub fn composite_turntable(
     opts: &CompositeOptions,
     frames: usize,
 ) -> NdResult<Vec<Image>> {
+    check_frames(frames)?;
+    check_memory(shape, opts, frames)?;
+    let mut out = Vec::with_capacity(frames);
+    composite_turntable_each(rgba, depth, shape, extras, opts, frames, |_, image| {
+        out.push(image)
+    })?;
+    Ok(out)
+}
+
+/// [`composite_turntable`] handing each frame to `each(k, frame)` as it is made, in order,
+/// instead of keeping them all: a caller that copies the frames into one array of its own
+/// holds them once. Checks the memory of one frame at a time (the caller's array is its own).
+pub fn composite_turntable_each(
+    rgba: &[f32],
+    depth: Option<&[f32]>,
+    shape: &[usize],
+    extras: &RetinaExtras<'_>,
+    opts: &CompositeOptions,
+    frames: usize,
+    mut each: impl FnMut(usize, Image),
+) -> NdResult<()> {
+    check_frames(frames)?;
+    let cells = check_retina(rgba, depth, shape)?;
+    check_extras(extras, cells, shape.len())?;
+    opts.validate_for(shape, depth.is_some())?;
+    check_memory(shape, opts, 0)?;
+    if shape.len() < 3 || opts.mode == CompositeMode::Slices {
+        let one = composite_retina(rgba, depth, shape, extras, opts)?;
+        for k in 0..frames {
+            each(k, one.clone());
+        }
+        return Ok(());
+    }
+    let layout = picture_layout(opts, shape, extras.legend_rows, None);
+    let (w, h) = layout.size;
+    check_size(w, h)?;
+    let view = View3::new(rgba, depth, shape, extras, cells, opts);
+    for k in 0..frames {
+        let o = CompositeOptions {
+            azimuth: opts.azimuth + 360.0 * k as f64 / frames as f64,
+            ..opts.clone()
+        };
+        each(
+            k,
+            Image {
+                width: w,
+                height: h,
+                rgba: view.picture(&o, &layout),
+            },
+        );
+    }
+    Ok(())
+}
+
+fn check_frames(frames: usize) -> NdResult<()> {
     if !(1..=MAX_TURNTABLE_FRAMES).contains(&frames) {
         return Err(NdError::Value {
             arg: "turntable".into(),
             message: format!("must be 1 to {MAX_TURNTABLE_FRAMES} frames, got {frames}"),
         });
     }
-    let cells = check_retina(rgba, depth, shape)?;
-    check_extras(extras, cells, shape.len())?;
-    opts.validate_for(shape, depth.is_some())?;
-    if shape.len() < 3 || opts.mode == CompositeMode::Slices {
-        let one = composite_retina(rgba, depth, shape, extras, opts)?;
-        return Ok(vec![one; frames]);
-    }
-    let layout = picture_layout(opts, shape, extras.legend_rows, None);
-    let (w, h) = layout.size;
-    check_size(w, h)?;
-    let view = View3::new(rgba, depth, shape, extras, cells, opts);
-    Ok((0..frames)
-        .map(|k| {
-            let o = CompositeOptions {
-                azimuth: opts.azimuth + 360.0 * k as f64 / frames as f64,
-                ..opts.clone()
-            };
-            Image {
-                width: w,
-                height: h,
-                rgba: view.picture(&o, &layout),
-            }
-        })
-        .collect())
+    Ok(())
+}
+
+/// Bytes a composite holds per retina cell beyond the retina itself, for an N-D retina: the
+/// prepared copy and the 3D volume's padded copy (16 bytes each), and the illustrative mode's
+/// cues (hit points and normals, N f64 each, colours, spacing and coverage).
+fn bytes_per_cell(n: usize) -> f64 {
+    64.0 + 16.0 * n as f64
+}
+
+/// Bytes a composite holds per picture pixel while it draws one: the picture (RGBA f32), the
+/// depths of the first-hit mode and the traced lattice of the sparse rays.
+const BYTES_PER_PIXEL: f64 = 16.0 + 4.0 + 16.0;
+
+/// Checks with the [memory guard](crate::memory::check) what a composite of a retina of numpy
+/// `shape` with `opts` needs, before any of it is allocated: its working copies of the cells,
+/// the picture being drawn and, for `frames` > 0, that many finished pictures (W × H RGBA
+/// floats each) held for the caller. A refusal names the option that decides it: `size` for a
+/// picture, `turntable` for a turntable's frames.
+pub fn check_memory(shape: &[usize], opts: &CompositeOptions, frames: usize) -> NdResult<()> {
+    let (w, h) = opts.size;
+    let pixels = w as f64 * h as f64;
+    let cells = shape.iter().map(|&r| r as f64).product::<f64>();
+    let working = cells * bytes_per_cell(shape.len() + 1) + pixels * BYTES_PER_PIXEL;
+    let (arg, what) = if frames == 0 {
+        ("size", format!("a picture of {w} × {h} pixels"))
+    } else {
+        ("turntable", format!("{frames} frames of {w} × {h} pixels"))
+    };
+    crate::memory::check(working + frames as f64 * pixels * 16.0, &what).map_err(|message| {
+        NdError::Value {
+            arg: arg.into(),
+            message,
+        }
+    })
 }
 
 /// The feature-edge pieces the illustrative picture of `opts` draws (one view, whatever

@@ -375,6 +375,11 @@ composite_options! {
         /// `shape = "half_space"` (`normal`, `offset`), `"sphere"` (`center`, `radius`) or
         /// `"box"` (`min`, `max`), in world coordinates (see [`Cutaway`]). Default none.
         cutaway: Option<Cutaway> = None,
+        /// For N ≥ 4: draw each occupied cell (coverage ≥ ½) as a small opaque cube of side
+        /// `size` cells (0 < size ≤ 1), the course's "break into tiny cubes: leave a little
+        /// space instead of transparency", instead of the mode's rendering (see
+        /// [`Cubes`](super::Cubes)). Default none.
+        cubes: Option<super::Cubes> = None,
     }
 }
 
@@ -519,8 +524,17 @@ impl CompositeOptions {
             axes_frame,
             title,
             edge_color_by: _,
+            cubes,
             given: _,
         } = self;
+        if let Some(c) = cubes {
+            if !(c.size > 0.0 && c.size <= 1.0) {
+                return Err(bad(
+                    "cubes.size",
+                    format!("must be in (0, 1] (a fraction of a cell), got {}", c.size),
+                ));
+            }
+        }
         if let Some(t) = title {
             if t.chars().count() > MAX_TITLE_CHARS || t.contains(['\n', '\r']) {
                 return Err(bad(
@@ -667,6 +681,12 @@ impl CompositeOptions {
                     format!("expected {n} rows of {n} numbers (an N×N matrix for N = {n})"),
                 ));
             }
+        }
+        if self.cubes.is_some() && m < 3 {
+            return Err(bad(
+                "cubes",
+                "draws the cells of a 3D (or larger) retina, N ≥ 4",
+            ));
         }
         // Stages: N − 4 = m − 3 of them for N ≥ 5.
         let n_stages = m.saturating_sub(3);

@@ -82,7 +82,8 @@ impl View3 {
             })
         };
         let sections = (opts.layout == ViewLayout::Sections).then(plain);
-        let illustrative = opts.mode == CompositeMode::Illustrative;
+        // Cubes draw the cells themselves, whatever the mode.
+        let illustrative = opts.mode == CompositeMode::Illustrative && opts.cubes.is_none();
         // The framing box: the occupied cells before any cutaway, so a cut does not move the
         // object in the picture.
         let mut frame = None;
@@ -246,6 +247,8 @@ impl View3 {
                     place(r, &self.view(&sized(r, opts.azimuth + side)));
                 }
             }
+            // The slice's half is drawn by whoever traces the slice.
+            ViewLayout::Slice => place(first, &self.view(&sized(first, opts.azimuth))),
             ViewLayout::Sections => {
                 place(first, &self.view(&sized(first, opts.azimuth)));
                 let vol = self.sections.as_ref().expect("sections volume");
@@ -306,7 +309,12 @@ impl View3 {
                 &classified
             }
         };
-        let (mut img, half) = render_view(grid, &cam, self.mode, opts, bg, !self.edges.is_empty());
+        let (mut img, half) = match opts.cubes {
+            Some(c) => {
+                super::cubes::render_cubes(grid, &cam, opts, c.size, bg, !self.edges.is_empty())
+            }
+            None => render_view(grid, &cam, self.mode, opts, bg, !self.edges.is_empty()),
+        };
         if !self.edges.is_empty() {
             let pixels = project(&self.edges, &cam);
             overlay::draw(&mut img, opts.size.0, &pixels, half.as_deref(), opts);

@@ -154,6 +154,20 @@ impl Grid {
         self.cells[(x + 1) + self.sy * (y + 1) + self.sz * (z + 1)].to_array()
     }
 
+    /// Cell `c` of the whole volume (x, y, z from 0), zero outside the stored part.
+    #[inline]
+    pub(super) fn cell_at(&self, c: [i64; 3]) -> [f32; 4] {
+        let mut local = [0usize; 3];
+        for k in 0..3 {
+            let v = c[k] - self.lo[k] as i64;
+            if v < 0 || v >= self.m[k] as i64 {
+                return [0.0; 4];
+            }
+            local[k] = v as usize;
+        }
+        self.cell(local[0], local[1], local[2])
+    }
+
     /// Trilinear sample at `p` (cell centres at half-integers), clamped to the edge cells.
     #[inline(always)]
     pub(super) fn sample(&self, p: [f32; 3]) -> Vec4 {
@@ -258,7 +272,8 @@ pub(super) struct Camera3 {
     ortho: bool,
     /// Eye (perspective) or centre of the view plane (orthographic), cell coordinates.
     eye: DVec3,
-    fwd: DVec3,
+    /// The view direction (unit), cell coordinates.
+    pub(super) fwd: DVec3,
     right: DVec3,
     up: DVec3,
     /// Image-plane units per pixel (at unit distance for perspective).

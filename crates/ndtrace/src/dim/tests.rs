@@ -46,3 +46,22 @@ fn the_body_is_evaluated_once_in_the_matching_arm_only() {
     let r = with_dim!({ evaluated += 1; 4usize }, N => N * 10);
     assert_eq!((r, evaluated), (Ok(40), 1));
 }
+
+/// The examples of `supported_dims!` and `with_dim!`'s documentation, which `cargo test` runs
+/// here (the crate's doc examples are not compiled as doctests).
+#[test]
+fn the_doc_examples_hold() {
+    macro_rules! count {
+        ($what:literal ; $($n:literal $variant:ident),*) => {
+            ($what, [$($n),*].len())
+        };
+    }
+    assert_eq!(
+        crate::supported_dims!((count) "dimensions"),
+        ("dimensions", 7)
+    );
+    let n: usize = 5;
+    let zeros = crate::with_dim!(n, N => [0.0f64; N].len()).unwrap();
+    assert_eq!(zeros, 5);
+    assert!(crate::with_dim!(9usize, N => N).is_err());
+}

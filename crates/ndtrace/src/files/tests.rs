@@ -53,7 +53,35 @@ fn retinas_round_trip_through_exr_in_every_dimension() {
         .unwrap()
         .file_name()
         .to_string_lossy()
-        .contains(".tmp-")));
+        .contains(".tmp")));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn written_files_keep_the_replaced_files_mode_and_long_names_work() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = std::env::temp_dir().join(format!("ndtrace-modes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let picture = Picture {
+        width: 2,
+        height: 1,
+        rgba: vec![0.5; 8],
+        depth: None,
+    };
+    // A legal name of 250 bytes: the temporary file's name must not be longer than 255.
+    let long = dir.join(format!("{}.exr", "p".repeat(246)));
+    write_picture_exr(&long, &picture).unwrap();
+    assert!(long.is_file());
+    // A file replaced keeps its mode (0640 here), not the temporary file's.
+    let path = dir.join("mode.exr");
+    std::fs::write(&path, b"old").unwrap();
+    std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o640)).unwrap();
+    write_picture_exr(&path, &picture).unwrap();
+    let mode = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode, 0o640);
+    // A folder is refused before anything is written.
+    let e = write_picture_exr(&dir, &picture).unwrap_err().to_string();
+    assert!(e.contains("it is a folder"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -450,3 +450,14 @@ fn degenerate_barycentric_is_reported() {
     assert_eq!(hyperplane(&q), Err(Degenerate::Simplex));
     assert_eq!(gram_volume(&q), 0.0);
 }
+
+/// The example of the crate's documentation (`lib.rs`), which `cargo test` runs here (the crate's
+/// doc examples are not compiled as doctests: one build of the crate for its tests).
+#[test]
+fn the_crate_doc_example_holds() {
+    // The edges e_1, e_2, e_3 of R^4 give +e_4 (eq. 6).
+    let n = generalized_cross::<4>(&[[1., 0., 0., 0.], [0., 1., 0., 0.], [0., 0., 1., 0.]]);
+    assert_eq!(n, [0., 0., 0., 1.]);
+    // The standard 2-simplex has area +1/2! (eqs. 2–3).
+    assert_eq!(signed_volume::<2>(&[[0., 0.], [1., 0.], [0., 1.]]), 0.5);
+}

@@ -25,7 +25,7 @@ fn the_cap_binds_and_refusals_say_what_and_how_much() {
     let e = check(600_000.0, "a retina of 9 cells").unwrap_err();
     assert!(
         e.starts_with("a retina of 9 cells needs about 585.9 KiB of memory")
-            && e.contains("1.0 MiB under NDTRACE_MEMORY_LIMIT"),
+            && e.contains("(512.0 KiB: half of the 1.0 MiB allowed by NDTRACE_MEMORY_LIMIT)"),
         "{e}"
     );
     assert!(check(f64::INFINITY, "x").is_err() && check(f64::NAN, "x").is_err());

@@ -83,6 +83,18 @@ pub fn check(field: &Field<'_>, extent: Option<&Extent>, height: f64) -> Result<
             "height must be a finite non-zero number, got {height}"
         ));
     }
+    // w = height·f must be finite too.
+    if let Some(i) = field
+        .values
+        .iter()
+        .position(|&v| v.is_finite() && !(height * v).is_finite())
+    {
+        let (x, y, z) = (i / (ny * nz), i / nz % ny, i % nz);
+        return Err(format!(
+            "height {height} × field[{x}, {y}, {z}] = {:e} overflows float64 (the elevation w = height·f must be finite)",
+            field.values[i]
+        ));
+    }
     if let Some(e) = extent {
         for (axis, [lo, hi]) in ["x", "y", "z"].iter().zip(e) {
             if !(lo.is_finite() && hi.is_finite() && hi > lo) {
@@ -109,6 +121,17 @@ pub fn elevation_map<const N: usize>(
             "an elevation map of a 3D field lives in R^4: it needs dim = 4, got dim = {N}"
         ));
     }
+    let e = elevation_map_4d(field, extent, height)?;
+    Ok(crate::dim::same(e).ok().expect("N = 4"))
+}
+
+/// [`elevation_map`] in R^4, compiled once.
+fn elevation_map_4d(
+    field: &Field<'_>,
+    extent: Option<&Extent>,
+    height: f64,
+) -> Result<Elevation<4>, String> {
+    const N: usize = 4;
     check(field, extent, height)?;
     let [nx, ny, nz] = field.shape;
     let extent = extent
@@ -234,6 +257,15 @@ pub fn gradient_normals<const N: usize>(
     elev: &Elevation<N>,
     height: f64,
 ) -> Vec<Vector<N>> {
+    let elev = crate::dim::same_ref::<_, Elevation<4>>(elev).expect("an elevation map is 4D");
+    crate::dim::same(gradient_normals_4d(field, elev, height))
+        .ok()
+        .expect("N = 4")
+}
+
+/// [`gradient_normals`] in R^4, compiled once.
+fn gradient_normals_4d(field: &Field<'_>, elev: &Elevation<4>, height: f64) -> Vec<Vector<4>> {
+    const N: usize = 4;
     let [nx, ny, nz] = field.shape;
     let f = field.values;
     let strides = [ny * nz, nz, 1];

@@ -41,5 +41,6 @@ pub mod elevation;
 pub mod features;
 mod filing;
 pub mod flat;
+pub mod slice;
 pub use edge_cache::EdgeCache;
 pub use features::feature_edges;

@@ -15,6 +15,8 @@
 //!   rays to the BVH as packets ([`crate::accel::PACKET`] rays), the shadow rays of their hits
 //!   as packets toward each light, constants computed once per trace, shadow rays that cannot
 //!   be blocked not traced. It gives [`shade_hit`]'s bits for every ray (tested cell by cell);
+//! - [`clip`]: clip hyperplanes, checked only in scenes that have them: a ray's nearest hit
+//!   beyond one of its object's hyperplanes is rejected and the ray traced again without it;
 //! - [`pool`]: the retina's output buffers, reused between traces;
 //! - `splat.rs` and `surface.rs`: after the trace, the surfaces drawn directly
 //!   ([`crate::surface`]) projected into the retina as thin sheets, occluded by depth and
@@ -24,6 +26,8 @@
 //! only on the scene, the seed and the cell index, so the retina is bit-identical whatever the
 //! number of threads.
 
+pub mod clip;
+mod gouraud;
 mod packets;
 pub mod pool;
 mod sampling;

@@ -14,12 +14,12 @@
 
 use super::shade::{
     blinn_phong, hit_color, id_color, light_term, shading_normal, shadow_ray, toward_light,
-    SHADOW_OFFSET,
+    vertex_factors, SHADOW_OFFSET,
 };
 use super::NearestHit;
 use crate::linalg::{add_scaled, dot, norm, scale, Vector};
 use crate::ray::{Hit, Ray};
-use crate::scene::desc::RenderMode;
+use crate::scene::desc::{RenderMode, Shading};
 use crate::scene::Scene;
 use std::ops::Range;
 
@@ -106,12 +106,16 @@ impl<const N: usize> GroupTracer<N> {
         scene
             .instances
             .closest_hits(&self.rays, 0.0, f64::INFINITY, accept, &mut self.hits);
+        if scene.clips.active() {
+            super::clip::clip_hits(scene, &self.rays, accept, &mut self.hits);
+        }
         self.color.clear();
         self.nearest.clear();
         self.terms.clear();
         self.shadow.clear();
         let requests = &mut self.requests;
         requests.clear();
+        let gouraud = scene.render.shading == Shading::Gouraud;
         // 2. Each ray's colour, but for the light terms that wait for their shadow rays.
         for (r, (ray, hit)) in self.rays.iter().zip(&self.hits).enumerate() {
             let Some(hit) = hit else {
@@ -138,31 +142,32 @@ impl<const N: usize> GroupTracer<N> {
                     // Terms are summed in light order: directly until one waits for its shadow
                     // ray, then after the shadow pass.
                     let mut waiting = false;
-                    light_terms(
-                        scene,
-                        ray,
-                        dir_len,
-                        hit,
-                        obj,
-                        sh,
-                        &diffuse,
-                        &n,
-                        |l, color, shadow| {
-                            if shadow.is_none() && !waiting {
-                                for k in 0..3 {
-                                    c[k] += color[k];
-                                }
-                                return;
+                    let emit = |l, color: [f64; 3], shadow: Option<ShadowRay<N>>| {
+                        if shadow.is_none() && !waiting {
+                            for k in 0..3 {
+                                c[k] += color[k];
                             }
-                            waiting = true;
-                            if let Some(shadow) = shadow {
-                                requests.push((l, self.terms.len(), shadow));
-                            }
-                            // Set to the shadow ray's index once the rays are in light order.
-                            self.shadow.push(None);
-                            self.terms.push((r, color));
-                        },
-                    );
+                            return;
+                        }
+                        waiting = true;
+                        if let Some(shadow) = shadow {
+                            requests.push((l, self.terms.len(), shadow));
+                        }
+                        // Set to the shadow ray's index once the rays are in light order.
+                        self.shadow.push(None);
+                        self.terms.push((r, color));
+                    };
+                    let at = (obj, local);
+                    // One branch per hit chooses the lighting model's loop.
+                    if gouraud {
+                        light_terms::<N, true>(
+                            scene, ray, dir_len, hit, at, sh, &diffuse, &n, emit,
+                        );
+                    } else {
+                        light_terms::<N, false>(
+                            scene, ray, dir_len, hit, at, sh, &diffuse, &n, emit,
+                        );
+                    }
                     c
                 }
                 RenderMode::Depth => {
@@ -218,6 +223,14 @@ impl<const N: usize> GroupTracer<N> {
                 );
                 first += run.len();
             }
+            if scene.clips.active() {
+                // Only a ray blocked by some hit may be blocked by a kept one.
+                for (i, r) in requests.iter().enumerate() {
+                    if self.blocked[i] {
+                        self.blocked[i] = super::clip::blocks(scene, &r.2.ray, r.2.tmax, &r.2.skip);
+                    }
+                }
+            }
         }
         // 4. The waiting terms, in light order per ray (the order of the sum, as for one ray
         //    alone).
@@ -238,15 +251,16 @@ impl<const N: usize> GroupTracer<N> {
 /// calls `emit` per light that faces the surface, in light order, with its index, its colour
 /// term and the shadow ray that decides whether it counts (none when nothing could block it).
 /// Lights behind the surface contribute nothing and need no shadow ray. `dir_len` is
-/// |ray.dir|.
+/// |ray.dir|. `GOURAUD`: the lighting factors at the simplex's vertices, interpolated
+/// (`render.shading = "gouraud"`), else at the hit.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn light_terms<const N: usize>(
+fn light_terms<const N: usize, const GOURAUD: bool>(
     scene: &Scene<N>,
     ray: &Ray<N>,
     dir_len: f64,
     hit: &Hit<N>,
-    obj: usize,
+    (obj, local): (usize, usize),
     sh: &ObjectShading,
     diffuse: &[f64; 3],
     n: &Vector<N>,
@@ -265,7 +279,13 @@ fn light_terms<const N: usize>(
         };
         let l = to_light.dir;
         let ndl = dot(n, &l);
-        if ndl <= 0.0 {
+        let gouraud = GOURAUD.then(|| {
+            let flip = super::gouraud::flipped(scene, hit, ray);
+            super::gouraud::factors(scene, (obj, local), hit, flip, |x, n| {
+                vertex_factors(scene, light, x, n, m.shininess, sh.specular)
+            })
+        });
+        if gouraud.map_or(ndl <= 0.0, |(d, s)| d <= 0.0 && s <= 0.0) {
             continue;
         }
         let shadow = if scene.render.shadows {
@@ -286,14 +306,17 @@ fn light_terms<const N: usize>(
             None
         };
         // Without a specular coefficient the term is k_d ∘ C · (n̂·l̂) + 0.
-        let spec = match &v {
-            Some(v) => blinn_phong(n, &l, v, m.shininess),
-            None => 0.0,
+        let term = match gouraud {
+            None => {
+                let spec = match &v {
+                    Some(v) => blinn_phong(n, &l, v, m.shininess),
+                    None => 0.0,
+                };
+                light_term(&to_light, diffuse, ndl, &m.specular, spec)
+            }
+            // The factors carry the attenuation at each vertex.
+            Some((d, spec)) => light_term(&to_light.unattenuated(), diffuse, d, &m.specular, spec),
         };
-        emit(
-            index,
-            light_term(&to_light, diffuse, ndl, &m.specular, spec),
-            shadow,
-        );
+        emit(index, term, shadow);
     }
 }

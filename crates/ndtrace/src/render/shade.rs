@@ -11,6 +11,7 @@ use crate::accel::{BOX_PAD, PLANE_ROUNDING};
 use crate::linalg::Rgb;
 use crate::linalg::{add, add_scaled, dot, norm, scale, sub, Vector};
 use crate::ray::{Hit, Ray};
+use crate::scene::desc::Shading;
 use crate::scene::{Light, Scene};
 
 /// Shadow rays start this fraction of the scene's diagonal off the surface, toward the light.
@@ -63,19 +64,34 @@ pub fn shade_hit<const N: usize>(scene: &Scene<N>, ray: &Ray<N>, hit: &Hit<N>) -
         let l = to_light.dir;
         // Lights behind the surface contribute nothing.
         let ndl = dot(&n, &l);
-        if ndl <= 0.0 {
+        let gouraud = (scene.render.shading == Shading::Gouraud).then(|| {
+            let flip = super::gouraud::flipped(scene, hit, ray);
+            let specular = m.specular.iter().any(|&s| s > 0.0);
+            super::gouraud::factors(scene, (obj, local), hit, flip, |x, n| {
+                vertex_factors(scene, light, x, n, m.shininess, specular)
+            })
+        });
+        if gouraud.map_or(ndl <= 0.0, |(d, s)| d <= 0.0 && s <= 0.0) {
             continue;
         }
         if scene.render.shadows {
             let along = dot(&hit.normal, &l) >= 0.0;
             let (shadow, tmax) = shadow_ray(&x, &hit.normal, along, &l, to_light.dist, eps);
-            if scene.instances.any_hit(&shadow, 0.0, tmax, |_| true, 0..0) {
+            if scene.instances.any_hit(&shadow, 0.0, tmax, |_| true, 0..0)
+                && (!scene.clips.active() || super::clip::blocks(scene, &shadow, tmax, &(0..0)))
+            {
                 continue;
             }
         }
         let diffuse: Rgb = std::array::from_fn(|k| m.diffuse[k] * color[k]);
-        let spec = blinn_phong(&n, &l, &v, m.shininess);
-        let term = light_term(&to_light, &diffuse, ndl, &m.specular, spec);
+        let term = match gouraud {
+            None => {
+                let spec = blinn_phong(&n, &l, &v, m.shininess);
+                light_term(&to_light, &diffuse, ndl, &m.specular, spec)
+            }
+            // The factors carry the attenuation at each vertex.
+            Some((d, spec)) => light_term(&to_light.unattenuated(), &diffuse, d, &m.specular, spec),
+        };
         for k in 0..3 {
             c[k] += term[k];
         }
@@ -146,6 +162,17 @@ pub(crate) struct TowardLight<'a, const N: usize> {
     pub(crate) atten: f64,
 }
 
+impl<const N: usize> TowardLight<'_, N> {
+    /// The same light without attenuation (its colour I_L alone).
+    #[inline(always)]
+    pub(crate) fn unattenuated(&self) -> Self {
+        TowardLight {
+            atten: 1.0,
+            ..*self
+        }
+    }
+}
+
 /// `light` as seen from `x`; `None` when x is at a point light (no direction to it).
 #[inline(always)]
 pub(crate) fn toward_light<'a, const N: usize>(
@@ -182,6 +209,35 @@ pub(crate) fn toward_light<'a, const N: usize>(
             })
         }
     }
+}
+
+/// Gouraud's factors of `light` at a vertex `x` of unit normal `n`: (a·max(0, n̂·l̂),
+/// a·max(0, n̂·ĥ)^shininess) with l̂ and a the light's direction and attenuation seen from the
+/// vertex and ĥ the half vector of l̂ and the direction from the vertex to the eye (0 without a
+/// `specular` term); `None` when the vertex faces away from the light.
+#[inline(always)]
+pub(super) fn vertex_factors<const N: usize>(
+    scene: &Scene<N>,
+    light: &Light<N>,
+    x: &Vector<N>,
+    n: &Vector<N>,
+    shininess: f64,
+    specular: bool,
+) -> Option<(f64, f64)> {
+    let to_light = toward_light(light, x)?;
+    let ndl = dot(n, &to_light.dir);
+    if ndl <= 0.0 {
+        return None;
+    }
+    let spec = if specular {
+        let e = scene.camera.toward_eye(x);
+        let len = norm(&e);
+        let v = if len > 0.0 { scale(&e, 1.0 / len) } else { *n };
+        to_light.atten * blinn_phong(n, &to_light.dir, &v, shininess)
+    } else {
+        0.0
+    };
+    Some((to_light.atten * ndl, spec))
 }
 
 /// The shadow ray from a hit point `x` on a simplex of unit normal `flat` toward a light in

@@ -325,9 +325,22 @@ pub fn splat<const N: usize>(
     first: usize,
     progress: &Progress,
 ) -> NdResult<()> {
-    if N != 4 || scene.objects.iter().all(|o| o.surface.is_none()) {
-        return Ok(());
+    match crate::dim::same_ref::<_, Scene<4>>(scene) {
+        Some(scene) if scene.objects.iter().any(|o| o.surface.is_some()) => {
+            splat_4d(scene, retina, first, progress)
+        }
+        _ => Ok(()),
     }
+}
+
+/// [`splat`] in R^4 (surfaces live there), compiled once.
+fn splat_4d(
+    scene: &Scene<4>,
+    retina: &mut Retina,
+    first: usize,
+    progress: &Progress,
+) -> NdResult<()> {
+    const N: usize = 4;
     let cam = &scene.camera;
     let map = RetinaMap {
         cam,

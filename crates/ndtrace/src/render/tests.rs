@@ -27,10 +27,14 @@ fn one_ray_at_a_time<const N: usize>(
             .camera
             .retina_point(cell, &offsets[j * (N - 1)..(j + 1) * (N - 1)], &mut u);
         let ray = scene.camera.ray(&u[..N - 1]);
-        let Some(hit) = scene
+        let first = scene
             .instances
-            .closest_hit(&ray, 0.0, f64::INFINITY, accept)
-        else {
+            .closest_hit(&ray, 0.0, f64::INFINITY, accept);
+        let Some(hit) = (if scene.clips.active() {
+            clip::nearest_kept(scene, &ray, 0.0, f64::INFINITY, &accept, first)
+        } else {
+            first
+        }) else {
             continue;
         };
         covered += 1;
@@ -164,6 +168,73 @@ type = "point"
 position = [-3.0, -0.5, 1.0]
 color = [0.2, 0.2, 0.9]
 falloff = 1.0"#;
+
+#[test]
+fn clipped_and_capped_scenes_shade_as_one_ray_at_a_time() {
+    // A 3-sphere cut open by a scene clip, capped, beside a tesseract cut by its own clip
+    // that lets light through onto the sphere; shadows on.
+    let text = r#"
+dim = 4
+clip = [{ normal = [0.3, 0.2, 0.1, 1.0], offset = 0.15 }]
+[camera]
+position = [1.0, 1.4, 1.9, 4.0]
+look_at = [0, 0, 0, 0]
+up = [[0, 1, 0, 0], [0, 0, 1, 0]]
+fov = 55
+resolution = 14
+[[lights]]
+type = "directional"
+direction = [0.4, 0.9, 0.3, -0.6]
+[[lights]]
+type = "point"
+position = [-2.0, 2.5, 1.0, 1.5]
+[[objects]]
+shape = "sphere"
+subdivisions = 1
+cap = true
+[[objects]]
+shape = "hypercube"
+clip = [{ normal = [0, 1, 0, 0], offset = 1.2 }]
+cap = true
+transform = [{ scale = 0.4 }, { translate = [0.2, 1.3, 0.1, 0.0] }]
+[render]
+samples = 3
+"#;
+    shades_as_one_ray_at_a_time(text, 100, 0);
+}
+
+#[test]
+fn gouraud_shading_shades_as_one_ray_at_a_time() {
+    // A smooth sphere (vertex normals) and a flat-shaded tesseract (the flat normal at every
+    // vertex), a point light with falloff (attenuation per vertex) and a specular term.
+    let text = r#"
+dim = 4
+[camera]
+position = [1.0, 1.4, 1.9, 4.0]
+look_at = [0, 0, 0, 0]
+up = [[0, 1, 0, 0], [0, 0, 1, 0]]
+fov = 55
+resolution = 12
+[[lights]]
+type = "point"
+position = [-2.0, 2.5, 1.0, 1.5]
+falloff = 1.0
+[[lights]]
+type = "directional"
+direction = [0.4, 0.9, 0.3, -0.6]
+[[objects]]
+shape = "sphere"
+subdivisions = 1
+material = { smooth = true, specular = 0.5 }
+[[objects]]
+shape = "hypercube"
+transform = [{ scale = 0.4 }, { translate = [0.2, 1.3, 0.1, 0.0] }]
+[render]
+samples = 2
+shading = "gouraud"
+"#;
+    shades_as_one_ray_at_a_time(text, 100, 0);
+}
 
 #[test]
 fn terms_added_at_once_or_after_the_shadow_pass_sum_in_light_order() {

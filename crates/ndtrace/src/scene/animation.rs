@@ -8,6 +8,7 @@
 //! sweep = { plane = [0, 3], degrees = [0, 360] }
 //! # or, in 4D: slerp = { from = [q0, p0], to = [q1, p1] }
 //! # or: rolling = { path = [[0, 0, 0], [1, 0, 0], [1, 1, 0]], radius = 1 }
+//! # or: slice = { normal = [0, 0, 0, 1], from = -1.2, to = 1.2 }
 //! ```
 //!
 //! Frame k is the scene as written with the motion's rotation M(t_k) applied about `center`:
@@ -21,11 +22,14 @@
 //!   geodesic between two 4D frames (course notes, "Quaternions and 4D rotations");
 //! - `rolling`: the rolling ball (rotations paper, eq. 5) driven along a polyline of controller
 //!   positions as a mouse would drive it: one rolling step per segment, accumulated in world
-//!   coordinates (M = M_m ⋯ M_1), the segment reached at t travelled in proportion to its length.
+//!   coordinates (M = M_m ⋯ M_1), the segment reached at t travelled in proportion to its length;
+//! - `slice`: no rotation; frame k is the scene's slice by the hyperplane n̂·x = offset(t_k),
+//!   the offset linear in t (its `[slice]` table set, see [`super::slice`]): the object passing
+//!   through our space.
 
 use super::desc::*;
 use super::errors::PathError;
-use super::fields::{matrix_rows, vec_n, R};
+use super::fields::{matrix_rows, slice_plane, vec_n, R};
 use crate::linalg::{add, mat_mul, mat_vec, sub, Matrix, Vector};
 use crate::rotation::{
     check_plane, plane_rotation, rolling_ball, scene_quaternion, slerp_so4, so4_from_quaternions,
@@ -111,12 +115,31 @@ fn unit_quaternion(q: &Quat, path: &str, symbol: &str) -> R<Quat> {
 
 /// The rotation M(t) of the animation's one motion (validated on the way).
 pub fn motion<const N: usize>(a: &AnimationDesc, t: f64) -> R<Matrix<N>> {
-    let given = [a.sweep.is_some(), a.slerp.is_some(), a.rolling.is_some()];
+    let given = [
+        a.sweep.is_some(),
+        a.slerp.is_some(),
+        a.rolling.is_some(),
+        a.slice.is_some(),
+        a.keyframes.is_some(),
+    ];
     if given.iter().filter(|&&g| g).count() != 1 {
         return Err(PathError::new(
             "animation",
-            "give exactly one motion: sweep, slerp or rolling",
+            "give exactly one motion: sweep, slerp, rolling, slice or keyframes",
         ));
+    }
+    if a.interpolation.is_some() && a.keyframes.is_none() {
+        return Err(PathError::new(
+            "animation.interpolation",
+            "applies to keyframes only",
+        ));
+    }
+    if let Some(keys) = &a.keyframes {
+        return keyframed::<N>(keys, a.interpolation.unwrap_or_default(), t);
+    }
+    if a.slice.is_some() {
+        slice_at::<N>(a, t)?;
+        return Ok(crate::linalg::identity());
     }
     if let Some(s) = &a.sweep {
         let [i, j] = s.plane;
@@ -206,6 +229,98 @@ pub fn motion<const N: usize>(a: &AnimationDesc, t: f64) -> R<Matrix<N>> {
     Ok(m)
 }
 
+/// The rotation of `keyframes` at animation time t ∈ [0, 1] (mapped onto the first to the
+/// last key's time): a C¹ spline through the keys ([`crate::rotation::spline`]: quaternions
+/// for N = 3, double quaternions for N = 4, SO(N) through the matrix log and exp otherwise),
+/// or geodesic pieces between neighbours (`"slerp"`).
+fn keyframed<const N: usize>(keys: &[KeyframeDesc], how: Interpolation, t: f64) -> R<Matrix<N>> {
+    use crate::rotation::spline;
+    let times: Vec<f64> = keys.iter().map(|k| k.time).collect();
+    let mats: Vec<Matrix<N>> = keys
+        .iter()
+        .enumerate()
+        .map(|(i, k)| {
+            super::transform::rotate::<N>(
+                &k.rotation,
+                &format!("animation.keyframes[{i}].rotation"),
+            )
+        })
+        .collect::<R<_>>()?;
+    spline::check_times(&times, keys.len()).map_err(|e| match e {
+        NdError::Value { arg, message } if arg == "times" => {
+            PathError::new("animation.keyframes", format!("times {message}"))
+        }
+        e => PathError::new("animation.keyframes", e.to_string()),
+    })?;
+    let time = times[0] + t * (times[keys.len() - 1] - times[0]);
+    let fail = |e: NdError| PathError::new("animation.keyframes", e.to_string());
+    match how {
+        Interpolation::Slerp => {
+            // Geodesic pieces: the two keys around `time`, whose two-key spline is the slerp.
+            let i = times
+                .partition_point(|&x| x <= time)
+                .clamp(1, keys.len() - 1)
+                - 1;
+            let pair = [mats[i], mats[i + 1]];
+            interpolate::<N>(&pair, &times[i..i + 2], time).map_err(fail)
+        }
+        Interpolation::Spline => interpolate::<N>(&mats, &times, time).map_err(fail),
+    }
+}
+
+/// The spline through rotations `mats` at `times`, at `time`, by the form of its dimension.
+fn interpolate<const N: usize>(
+    mats: &[Matrix<N>],
+    times: &[f64],
+    time: f64,
+) -> crate::NdResult<Matrix<N>> {
+    use crate::rotation::{matrix_to_quat_sequence, quat_to_matrix, quaternions_from_so4, spline};
+    let cast =
+        |m: &[f64]| -> Matrix<N> { std::array::from_fn(|r| std::array::from_fn(|c| m[r * N + c])) };
+    if N == 3 {
+        let m3: Vec<Matrix<3>> = mats
+            .iter()
+            .map(|m| std::array::from_fn(|r| std::array::from_fn(|c| m[r][c])))
+            .collect();
+        let q = matrix_to_quat_sequence(&m3);
+        let r = quat_to_matrix(&spline::quaternion_spline(&q, times, &[time], true)?[0]);
+        return Ok(cast(r.as_flattened()));
+    }
+    if N == 4 {
+        let (l, p): (Vec<_>, Vec<_>) = mats
+            .iter()
+            .map(|m| {
+                quaternions_from_so4(&std::array::from_fn(|r| std::array::from_fn(|c| m[r][c])))
+            })
+            .unzip();
+        let r = spline::so4_spline(&l, &p, times, &[time])?[0];
+        return Ok(cast(r.as_flattened()));
+    }
+    Ok(spline::so_n_spline(mats, times, &[time])?[0])
+}
+
+/// The `[slice]` of a slice sweep at time t: offset `from + t·(to − from)`; `None` for the
+/// other motions.
+pub fn slice_at<const N: usize>(a: &AnimationDesc, t: f64) -> R<Option<SliceDesc>> {
+    let Some(s) = &a.slice else {
+        return Ok(None);
+    };
+    for (name, x) in [("from", s.from), ("to", s.to)] {
+        if !x.is_finite() {
+            return Err(PathError::new(
+                format!("animation.slice.{name}"),
+                format!("must be finite, got {x}"),
+            ));
+        }
+    }
+    let cut = SliceDesc {
+        normal: s.normal.clone(),
+        offset: s.from + t * (s.to - s.from),
+    };
+    slice_plane::<N>(&cut, "animation.slice")?;
+    Ok(Some(cut))
+}
+
 /// The description of frame `k`: the scene with M(t_k) applied to the target about `center`,
 /// and without the `[animation]` table (a still).
 pub fn frame_desc(desc: &SceneDesc, k: u32) -> Result<SceneDesc, PathError> {
@@ -241,6 +356,11 @@ fn frame_desc_n<const N: usize>(desc: &SceneDesc, a: &AnimationDesc, k: u32) -> 
         |x: &[f64], path: String| -> R<Vec<f64>> { Ok(mat_vec(&m, &vec(x, &path)?).to_vec()) };
     let mut out = desc.clone();
     out.animation = None;
+    if let Some(cut) = slice_at::<N>(a, frame_time(a, k))? {
+        // A slice sweep moves the hyperplane, not the scene.
+        out.slice = Some(cut);
+        return Ok(out);
+    }
     let step = if c.iter().all(|&x| x == 0.0) {
         TransformDesc::Matrix(m.iter().map(|r| r.to_vec()).collect())
     } else {

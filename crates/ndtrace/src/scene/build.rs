@@ -60,6 +60,9 @@ pub struct Scene<const N: usize> {
     pub warnings: Vec<String>,
     /// The objects' feature edges, found on first use (shared like the BVH).
     pub(crate) edge_cache: Arc<crate::mesh::EdgeCache<N>>,
+    /// The clip hyperplanes of each object and the caps' inside tests (empty without clips:
+    /// rays are not checked; `render/clip.rs`).
+    pub clips: Arc<super::clip::Clips<N>>,
     /// Fewest simplices a transformed object needs to be traced in its own space
     /// ([`crate::accel::INSTANCE_MIN`]; tests lower it).
     pub(crate) instance_min: usize,
@@ -166,10 +169,14 @@ pub(crate) fn build_using<const N: usize>(
         camera,
         lights,
         mut objects,
-        surface_warnings,
-        maps,
-        own,
+        mut surface_warnings,
+        mut maps,
+        mut own,
     } = parts::<N>(desc, base, reader, (&options, true))?;
+    // 2b. The clips, and the caps after the scene's objects.
+    let mut clips = super::clip::clips(desc, &mut objects, &mut surface_warnings)?;
+    maps.resize(objects.len(), None);
+    own.resize(objects.len(), None);
     // 3. The index over every simplex.
     let (offsets, total) = offsets_of(objects.iter().map(|o| &o.mesh));
     if total >= 1 << 31 {
@@ -193,13 +200,16 @@ pub(crate) fn build_using<const N: usize>(
         .filter_map(|(i, (o, _))| orientation_warning(&o.mesh, &format!("objects[{i}]")))
         .collect();
     let built = {
-        let mut index: Vec<AccelObject<'_, N>> = (objects.iter_mut().zip(&desc.objects))
+        // Caps are flat pieces: no certificate, no flat-cell search.
+        let shapes = desc.objects.iter().map(|d| d.shape);
+        let shapes = shapes.chain(std::iter::repeat(ShapeKind::Elevation));
+        let mut index: Vec<AccelObject<'_, N>> = (objects.iter_mut().zip(shapes))
             .zip(maps.iter().zip(own))
-            .map(|((o, d), (map, own))| AccelObject {
+            .map(|((o, shape), (map, own))| AccelObject {
                 mesh: &mut o.mesh,
                 own,
                 map: *map,
-                hints: hints(d.shape),
+                hints: hints(shape),
             })
             .collect();
         build_index(&mut index, &offsets, &options)
@@ -213,6 +223,14 @@ pub(crate) fn build_using<const N: usize>(
     // The trees find their exact simplices in the scene's objects.
     let objects = Arc::new(objects);
     let instances = built.finish(&objects, &boxes);
+    // A cap's inside test looks at the global ids of the object it caps.
+    for c in &mut clips.objects {
+        if let Some(r) = &c.inside_of {
+            let o = r.start as usize;
+            let end = offsets.get(o + 1).copied().unwrap_or(total as u32);
+            c.inside_of = Some(offsets[o]..end);
+        }
+    }
     warnings.extend(surface_warnings);
     if skipped > 0 {
         warnings.push(format!(
@@ -233,6 +251,7 @@ pub(crate) fn build_using<const N: usize>(
         warnings,
         edge_cache: Arc::default(),
         instance_min: options.instance_min,
+        clips: Arc::new(clips),
     })
 }
 
@@ -364,6 +383,9 @@ pub(super) fn parts<const N: usize>(
     }
     if let Some(a) = &desc.animation {
         super::animation::check::<N>(a, desc.objects.len())?;
+    }
+    if let Some(s) = &desc.slice {
+        super::fields::slice_plane::<N>(s, "slice")?;
     }
     check_composite(desc.composite.as_ref(), &camera)?;
     // 2. The objects in world space.

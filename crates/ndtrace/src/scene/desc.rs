@@ -61,6 +61,58 @@ pub struct SceneDesc {
     /// `ndtrace --frames`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub animation: Option<AnimationDesc>,
+    /// The hyperplane the command line and `ndtrace.animate` cut the scene with: they render
+    /// the (N−1)-dimensional slice ([`super::slice`]) instead of the scene, or beside it with
+    /// `[composite] layout = "slice"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slice: Option<SliceDesc>,
+    /// Clip hyperplanes acting on every object: rays ignore hits on their far side
+    /// ([`super::clip`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub clip: Vec<ClipDesc>,
+    /// Fill the cuts of every closed object's clip hyperplanes with its slice (an object's own
+    /// `cap` overrides it).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub cap: bool,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+/// A clip hyperplane n̂·x = `offset` (n̂ the unit `normal`): what lies beyond it, n̂·x > offset,
+/// is not drawn.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClipDesc {
+    /// The hyperplane's normal, N numbers (need not be unit length), pointing to the side
+    /// removed.
+    pub normal: Vec<f64>,
+    /// Its signed distance from the origin along the unit normal.
+    pub offset: f64,
+}
+
+/// `[slice]`: the hyperplane n̂·x = `offset` (n̂ the unit `normal`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SliceDesc {
+    /// The hyperplane's normal, N numbers (need not be unit length).
+    pub normal: Vec<f64>,
+    /// Its signed distance from the origin along the unit normal.
+    pub offset: f64,
+}
+
+/// `[animation] slice = { normal, from, to }`: the scene swept through the hyperplane
+/// n̂·x = offset, offset linear in t from `from` to `to`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SliceSweepDesc {
+    /// The hyperplane's normal, N numbers.
+    pub normal: Vec<f64>,
+    /// The offset at t = 0.
+    pub from: f64,
+    /// The offset at t = 1.
+    pub to: f64,
 }
 
 impl SceneDesc {
@@ -76,9 +128,12 @@ impl SceneDesc {
             render,
             composite,
             animation: _,
+            slice,
+            clip,
+            cap,
         } = self;
         (
-            dim, background, ambient, camera, lights, objects, render, composite,
+            dim, background, ambient, camera, lights, objects, render, composite, slice, clip, cap,
         ) == (
             &other.dim,
             &other.background,
@@ -88,6 +143,9 @@ impl SceneDesc {
             &other.objects,
             &other.render,
             &other.composite,
+            &other.slice,
+            &other.clip,
+            &other.cap,
         )
     }
 }
@@ -130,6 +188,38 @@ pub struct AnimationDesc {
     /// A rolling-ball path.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rolling: Option<RollingPathDesc>,
+    /// A sweep of the `[slice]` hyperplane through the scene (no rotation: each frame is the
+    /// scene's slice at that offset).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slice: Option<SliceSweepDesc>,
+    /// Rotations at given times, interpolated ([`crate::rotation::spline`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keyframes: Option<Vec<KeyframeDesc>>,
+    /// How `keyframes` are interpolated: `"spline"` (C¹, the default) or `"slerp"` (geodesic
+    /// pieces).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interpolation: Option<Interpolation>,
+}
+
+/// One keyframe: the rotation at a time.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeyframeDesc {
+    /// When (any unit; the frames span the first to the last key's time).
+    pub time: f64,
+    /// The rotation, in any form of a transform's `rotate` step.
+    pub rotation: RotateDesc,
+}
+
+/// How keyframes are interpolated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Interpolation {
+    /// A C¹ orientation spline through the keys.
+    #[default]
+    Spline,
+    /// Geodesic pieces between neighbouring keys.
+    Slerp,
 }
 
 fn default_frames() -> u32 {
@@ -371,6 +461,13 @@ pub struct ObjectDesc {
     /// Transforms applied in order (the first entry acts first).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub transform: Vec<TransformDesc>,
+    /// Clip hyperplanes of this object (world space), besides the scene's.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub clip: Vec<ClipDesc>,
+    /// Fill the cuts of this object's clip hyperplanes (its own and the scene's) with its slice
+    /// (default: the scene's `cap`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cap: Option<bool>,
 }
 
 /// An elevation map's field: a file name, the values inline as nested lists `[x][y][z]`, or
@@ -713,6 +810,27 @@ pub struct RenderDesc {
     /// What to render.
     #[serde(default)]
     pub mode: RenderMode,
+    /// Where the lighting is evaluated: at every hit (`"phong"`, the default) or at the hit
+    /// simplex's vertices and interpolated (`"gouraud"`).
+    #[serde(default, skip_serializing_if = "is_phong")]
+    pub shading: Shading,
+}
+
+fn is_phong(s: &Shading) -> bool {
+    *s == Shading::Phong
+}
+
+/// Where the lighting model is evaluated (notes Part II(B): "dot product of light with 4D
+/// versions of usual vectors give Gouraud and Phong models").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Shading {
+    /// At every hit point, with the interpolated shading normal (Phong).
+    #[default]
+    Phong,
+    /// At the vertices of the hit simplex (their normals, positions and directions to the
+    /// eye), the diffuse and specular factors interpolated barycentrically (Gouraud).
+    Gouraud,
 }
 
 fn default_samples() -> u32 {
@@ -731,6 +849,7 @@ impl Default for RenderDesc {
             cull_backfaces: false,
             two_sided: true,
             mode: RenderMode::Shaded,
+            shading: Shading::Phong,
         }
     }
 }

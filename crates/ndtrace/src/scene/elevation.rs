@@ -74,6 +74,18 @@ pub(crate) fn elevation_object<const N: usize>(
             format!("shape \"elevation\" is the graph of a 3D field in R^4: it needs dim = 4, got dim = {N}"),
         ));
     }
+    let e = elevation_object_4d(o, path, base, reader)?;
+    Ok(crate::dim::same(e).ok().expect("N = 4"))
+}
+
+/// [`elevation_object`] in R^4, compiled once.
+fn elevation_object_4d(
+    o: &ObjectDesc,
+    path: &str,
+    base: Option<&Path>,
+    reader: Option<&dyn MeshReader>,
+) -> R<ElevationObject<4>> {
+    const N: usize = 4;
     for (key, present) in unused(o) {
         if present {
             return Err(PathError::new(

@@ -10,6 +10,23 @@ use crate::mesh::Mesh;
 /// A field's value or the located error.
 pub(crate) type R<T> = Result<T, PathError>;
 
+/// The hyperplane of a `[slice]` table (errors name `path.normal`, `path.offset`).
+pub(crate) fn slice_plane<const N: usize>(
+    s: &super::desc::SliceDesc,
+    path: &str,
+) -> R<crate::mesh::slice::SlicePlane<N>> {
+    if s.normal.len() != N {
+        return Err(PathError::new(
+            format!("{path}.normal"),
+            format!("expected {N} numbers, got {}", s.normal.len()),
+        ));
+    }
+    crate::mesh::slice::SlicePlane::<N>::new(&s.normal, s.offset).map_err(|e| match e {
+        crate::NdError::Value { arg, message } => PathError::new(format!("{path}.{arg}"), message),
+        e => PathError::new(path, e.to_string()),
+    })
+}
+
 /// Every number of `v` is finite; else the error names the first that is not (`path[i]`).
 pub(crate) fn finite_list(v: &[f64], path: &str) -> R<()> {
     match v.iter().position(|x| !x.is_finite()) {

@@ -44,7 +44,8 @@ impl<const N: usize> Scene<N> {
     /// the number of degenerate simplices changed (the warnings would): build `desc` then. Its
     /// warnings are this scene's (orientation and degeneracy do not depend on the transforms).
     pub(crate) fn moved(&self, desc: &SceneDesc) -> Option<R<Scene<N>>> {
-        if desc.objects.iter().any(ObjectDesc::reads_file) {
+        // Clips and caps (which depend on the objects' places) are made by a build.
+        if desc.objects.iter().any(ObjectDesc::reads_file) || self.clips.active() {
             return None;
         }
         let options = AccelOptions {
@@ -145,6 +146,7 @@ impl<const N: usize> Scene<N> {
             warnings: self.warnings.clone(),
             edge_cache,
             instance_min: self.instance_min,
+            clips: self.clips.clone(),
         }))
     }
 }

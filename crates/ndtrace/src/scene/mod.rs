@@ -4,6 +4,7 @@
 pub mod animation;
 pub mod build;
 mod camera;
+pub mod clip;
 pub mod desc;
 mod elevation;
 pub mod errors;
@@ -14,6 +15,7 @@ mod material;
 pub mod mesh_file;
 pub mod npz;
 mod objects;
+pub mod slice;
 pub mod table;
 mod transform;
 
@@ -263,6 +265,34 @@ pub fn reanimated(
             .map(|()| with_scene!(built, s, _N => s.clone().into_any()))
             .map_err(|e| locate(&Source::Unlocated(name), None, e)),
     )
+}
+
+/// The description of the (N−1)-dimensional slice of `desc` (built as `scene`) by the
+/// hyperplane `cut` ([`slice::slice_desc`]); `None` for `cut` takes the scene's `[slice]`.
+/// Errors are prefixed with `name` and name `slice.normal` or `slice.offset`.
+pub fn slice_scene(
+    desc: &SceneDesc,
+    scene: &AnyScene,
+    cut: Option<&desc::SliceDesc>,
+    name: &str,
+) -> NdResult<SceneDesc> {
+    let fail = |e| locate(&Source::Unlocated(name), None, e);
+    let Some(cut) = cut.or(desc.slice.as_ref()) else {
+        return Err(fail(PathError::new(
+            "slice",
+            "the scene has no [slice] table",
+        )));
+    };
+    if desc.dim < 3 {
+        return Err(fail(PathError::new(
+            "slice",
+            format!(
+                "slices need dim ≥ 3 (their dimension is dim − 1), got dim = {}",
+                desc.dim
+            ),
+        )));
+    }
+    with_scene!(scene, s, _N => slice::slice_desc(desc, s, cut, "slice")).map_err(fail)
 }
 
 /// Serializes a description as TOML (the inverse of [`load_toml_str`] for the description).

@@ -7,7 +7,9 @@
 //! dtype. Every size a file claims is checked against the bytes it holds before anything is
 //! allocated or parsed, so that a broken or hostile file is an error and never a panic, a
 //! huge allocation or a deep recursion:
-//! - the archive entry is read as it decompresses, never preallocated from its claimed size;
+//! - an array is read header first: the memory its shape needs is checked by the memory guard
+//!   before the rest is read or inflated, and an archive member is read to its end, so that
+//!   its CRC-32 is checked;
 //! - the header length must fit in the entry, and is capped as numpy caps it (10,000 bytes);
 //! - the header's bracket nesting is bounded before the Python-literal parser sees it;
 //! - the shape's element count and byte count are products checked for overflow (npyz
@@ -47,14 +49,9 @@ pub fn read_npz(path: &Path, names: &[&str]) -> Result<Vec<Array2>, String> {
             let entry = zip
                 .by_name(&npyz::npz::file_name_from_array_name(name))
                 .map_err(|_| format!("{} has no array named \"{name}\"", path.display()))?;
-            // Read as it decompresses (at most the size the entry claims), so that a claimed
-            // size is never an allocation.
             let claimed = entry.size();
-            let mut bytes = Vec::new();
-            entry
-                .take(claimed)
-                .read_to_end(&mut bytes)
-                .map_err(|e| format!("{}: reading array \"{name}\": {e}", path.display()))?;
+            let bytes = read_member(entry, claimed)
+                .map_err(|e| format!("{}: array \"{name}\": {e}", path.display()))?;
             parse_npy(&bytes).map_err(|e| format!("{}: array \"{name}\": {e}", path.display()))
         })
         .collect()
@@ -94,7 +91,7 @@ pub fn parse_npy(bytes: &[u8]) -> Result<Array2, String> {
 /// Parses an `.npy` buffer holding a numeric array of any shape.
 pub fn parse_npy_nd(bytes: &[u8]) -> Result<ArrayNd, String> {
     // 1. The sizes the header claims, checked before npyz parses or allocates anything.
-    let data_len = check_header(bytes)?;
+    let data_len = check_header(bytes, bytes.len())?;
     let npy = NpyFile::new(bytes).map_err(|e| format!("not a valid .npy array: {e}"))?;
     let header = npy.header();
     let shape = header.shape().to_vec();
@@ -217,18 +214,74 @@ pub fn read_npz_array(path: &Path, name: Option<&str>) -> Result<ArrayNd, String
             )
         })?;
     let claimed = entry.size();
-    let mut bytes = Vec::new();
-    entry
-        .take(claimed)
-        .read_to_end(&mut bytes)
-        .map_err(|e| format!("{}: reading array \"{name}\": {e}", path.display()))?;
+    let bytes = read_member(entry, claimed)
+        .map_err(|e| format!("{}: array \"{name}\": {e}", path.display()))?;
     parse_npy_nd(&bytes).map_err(|e| format!("{}: array \"{name}\": {e}", path.display()))
 }
 
-/// Reads an `.npy` file; errors name the file.
+/// Reads an `.npy` file; errors name the file. Its header is read first and the memory the
+/// array needs checked by the guard before the rest of the file is read.
 pub fn read_npy(path: &Path) -> Result<ArrayNd, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+    let file =
+        std::fs::File::open(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+    let len = file
+        .metadata()
+        .map_err(|e| format!("cannot open {}: {e}", path.display()))?
+        .len();
+    let bytes = read_member(std::io::BufReader::new(file), len)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
     parse_npy_nd(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// The bytes of an `.npy` array of `claimed` bytes (an archive member, or a file), read from
+/// `source` in three steps, so that neither a claimed size nor a shape is an allocation before
+/// it has been checked:
+/// 1. the header alone (at most [`MAX_HEADER_LEN`] bytes after the magic), its sizes checked
+///    as [`parse_npy_nd`] checks them;
+/// 2. the memory the array needs — its stored bytes and its values as f64, twice for a
+///    Fortran-ordered array — checked by the [memory guard](crate::memory::check) (a 9 MB
+///    archive of zeros may inflate to gigabytes);
+/// 3. the rest, read to its end, so that an archive member's CRC-32 is checked (a member that
+///    does not match its checksum, or holds more than it claims, is an error).
+fn read_member(mut source: impl Read, claimed: u64) -> Result<Vec<u8>, String> {
+    let reading = |e: std::io::Error| format!("reading it: {e}");
+    // 1. The header.
+    let head_len = usize::try_from(claimed.min((12 + MAX_HEADER_LEN) as u64)).unwrap_or(0);
+    let mut bytes = Vec::with_capacity(head_len);
+    (&mut source)
+        .take(head_len as u64)
+        .read_to_end(&mut bytes)
+        .map_err(reading)?;
+    let total =
+        usize::try_from(claimed).map_err(|_| format!("claims {claimed} bytes, too many"))?;
+    let data_len = check_header(&bytes, total)?;
+    // 2. The memory it needs, from the header's shape and dtype.
+    let npy = NpyFile::new(&bytes[..]).map_err(|e| format!("not a valid .npy array: {e}"))?;
+    let header = npy.header();
+    let count = header.shape().iter().fold(1f64, |c, &d| c * d as f64);
+    let copies = if header.order() == Order::Fortran {
+        2.0
+    } else {
+        1.0
+    };
+    let shape = shape_text(header.shape());
+    crate::memory::check(
+        total as f64 + count * 8.0 * copies + data_len as f64,
+        &format!(
+            "reading an array of shape {shape} ({})",
+            header.dtype().descr().trim_matches('\'')
+        ),
+    )?;
+    // 3. The rest, to its end (where the CRC-32 is checked).
+    bytes.reserve_exact(total.saturating_sub(bytes.len()));
+    source.read_to_end(&mut bytes).map_err(reading)?;
+    if bytes.len() as u64 != claimed {
+        return Err(format!(
+            "holds {} bytes, not the {claimed} it claims",
+            bytes.len()
+        ));
+    }
+    Ok(bytes)
 }
 
 fn convert<T>(
@@ -259,8 +312,9 @@ fn too_big(shape: &[u64]) -> String {
 /// Checks the sizes an `.npy` header claims against the bytes there are, before npyz parses it:
 /// the header fits in the buffer, is no longer than [`MAX_HEADER_LEN`] and nests no deeper than
 /// [`MAX_HEADER_DEPTH`]; its shape's dimensions multiply without overflow and their product
-/// fits in the data. Returns the data's length in bytes.
-fn check_header(bytes: &[u8]) -> Result<usize, String> {
+/// fits in the data. `bytes` holds at least the header; `total` is the length of the whole
+/// array, header and data. Returns the data's length in bytes.
+fn check_header(bytes: &[u8], total: usize) -> Result<usize, String> {
     if bytes.len() < 8 || &bytes[..6] != b"\x93NUMPY" {
         return Err("not an .npy array (no \\x93NUMPY magic)".into());
     }
@@ -283,13 +337,16 @@ fn check_header(bytes: &[u8]) -> Result<usize, String> {
             "the .npy header claims {header_len} bytes, more than the {MAX_HEADER_LEN} allowed"
         ));
     }
-    let text = bytes.get(start..start + header_len).ok_or_else(|| {
-        format!(
-            "truncated .npy header: it claims {header_len} bytes, the array holds {}",
-            bytes.len() - start.min(bytes.len())
-        )
-    })?;
-    let data_len = bytes.len() - start - header_len;
+    let text = bytes
+        .get(start..start + header_len)
+        .filter(|_| start + header_len <= total)
+        .ok_or_else(|| {
+            format!(
+                "truncated .npy header: it claims {header_len} bytes, the array holds {}",
+                total - start.min(total)
+            )
+        })?;
+    let data_len = total - start - header_len;
     let text = std::str::from_utf8(text).map_err(|_| "the .npy header is not text")?;
     // The nesting depth, ignoring brackets inside quotes (a crude scan is enough for a bound).
     let (mut depth, mut deepest, mut quote) = (0usize, 0usize, None);

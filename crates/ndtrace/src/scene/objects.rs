@@ -202,10 +202,16 @@ pub(super) fn world_object<const N: usize>(
         .iter()
         .position(|v| v.iter().any(|x| !x.is_finite()))
     {
-        return Err(PathError::new(
-            format!("{path}.transform"),
-            format!("makes vertex {k} non-finite"),
-        ));
+        // Only a transform can make a vertex non-finite here (the shapes' own vertices are
+        // checked where they are made); without one, the object itself is named.
+        return Err(if moves {
+            PathError::new(
+                format!("{path}.transform"),
+                format!("makes vertex {k} non-finite"),
+            )
+        } else {
+            PathError::new(path, format!("vertex {k} is not finite"))
+        });
     }
     if det(&a) < 0.0 {
         mesh.simplices.iter_mut().for_each(|s| s.swap(0, 1));

@@ -52,7 +52,7 @@ pub(super) fn transform<const N: usize>(
 
 /// The matrix of a `rotate` transform: exactly one of the plane, double-quaternion (4D) and
 /// rolling-ball forms, with only the keys of that form.
-fn rotate<const N: usize>(r: &RotateDesc, path: &str) -> R<Matrix<N>> {
+pub(super) fn rotate<const N: usize>(r: &RotateDesc, path: &str) -> R<Matrix<N>> {
     let forms = [
         ("plane", r.plane.is_some()),
         ("quaternions", r.quaternions.is_some()),

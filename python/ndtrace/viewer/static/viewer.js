@@ -82,6 +82,24 @@ export function mount(root, transport) {
     el("div", { class: "ndv-row" }, el("span", { text: "zoom" }), zoomValue),
     el("div", { class: "ndv-row" }, el("span", { text: "3D view" }), orbitValue),
   );
+  // Slice mode: the scene cut by the hyperplane (last axis) = offset, drawn as an (N−1)-D
+  // scene; the rolling ball turns the object through the hyperplane.
+  const sliceOn = el("input", { type: "checkbox", class: "ndv-slice-on", title: "show the slice by the hyperplane instead of the projection" });
+  const sliceOffset = el("input", { type: "range", min: -200, max: 200, step: 1, value: 0, class: "ndv-slice-offset", title: "the hyperplane's offset" });
+  const sliceValue = el("output", { class: "ndv-value", text: "0.00" });
+  const sliceAxis = el("span", { text: "slice" });
+  const sliceSection = el(
+    "section", { hidden: "" }, el("h3", { text: "Slice" }),
+    el("label", { class: "ndv-row" }, sliceAxis, sliceOn),
+    el("label", { class: "ndv-row" }, el("span", { text: "offset" }), sliceOffset, sliceValue),
+  );
+  const sendSlice = () => {
+    const offset = Number(sliceOffset.value) / 100;
+    sliceValue.textContent = offset.toFixed(2);
+    send({ type: "slice", on: sliceOn.checked, offset });
+  };
+  sliceOn.addEventListener("change", sendSlice);
+  sliceOffset.addEventListener("input", () => { if (sliceOn.checked) sendSlice(); else sliceValue.textContent = (Number(sliceOffset.value) / 100).toFixed(2); });
   const aidsBox = el("div", { class: "ndv-aids" });
   const aidsSection = el("section", { hidden: "" }, el("h3", { text: "Display aids" }), aidsBox);
 
@@ -118,7 +136,7 @@ export function mount(root, transport) {
       item("S", " snap to axes · ", "R", " reset · ", "C", " copy TOML"),
     );
   }
-  const panel = el("aside", { class: "ndv-panel" }, rotateSection, matrixSection, compositeSection, aidsSection, viewSection, keys);
+  const panel = el("aside", { class: "ndv-panel" }, rotateSection, matrixSection, sliceSection, compositeSection, aidsSection, viewSection, keys);
   const message = el("div", { class: "ndv-message", hidden: "" });
   const main = el("div", { class: "ndv-main" }, stage, panel);
   const viewer = el("div", { class: "ndv" }, bar, main, message);
@@ -171,6 +189,11 @@ export function mount(root, transport) {
     state.acked = msg.seq;
     state.rotation = msg.rotation;
     state.options = msg.options;
+    if (document.activeElement !== sliceOn) sliceOn.checked = msg.slice != null;
+    if (msg.slice != null && !sliceOffset.matches(":active")) {
+      sliceOffset.value = Math.round(msg.slice * 100);
+      sliceValue.textContent = msg.slice.toFixed(2);
+    }
     if (document.activeElement !== matrix) matrix.value = formatMatrix(msg.rotation);
     const o = msg.options;
     if (hello && hello.dim >= 4) {
@@ -218,6 +241,8 @@ export function mount(root, transport) {
     matrix.rows = n;
     matrixSection.querySelector(".ndv-matrix-title").textContent = `Rotation in SO(${n})`;
     compositeSection.hidden = !msg.orbit;
+    sliceSection.hidden = !msg.slices;
+    sliceAxis.textContent = `slice ${last} = offset`;
     viewSection.querySelector(".ndv-orbit-buttons").hidden = !msg.orbit;
     modeSelect.replaceChildren(
       el("option", { value: "", text: msg.mode_default ? `default (${msg.mode_default})` : "default" }),

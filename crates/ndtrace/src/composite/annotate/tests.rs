@@ -86,7 +86,7 @@ fn stereo_and_stage_titles_caption_and_legend_bands() {
     let l = picture_layout(&o, &[32, 32, 32], 2, None);
     assert_eq!(l.size, STEREO_SIZE);
     let titles: Vec<&str> = l.panels.iter().map(|p| p.title.as_deref().unwrap()).collect();
-    assert_eq!(titles, ["left eye", "right eye"]);
+    assert_eq!(titles, ["left", "right"]);
     assert!(l.panels.iter().all(|p| p.rect.w >= 256 && p.rect.h >= 256));
     let caption = l.caption.unwrap();
     assert_eq!((caption.x, caption.y, caption.w), (0, 0, l.size.0));

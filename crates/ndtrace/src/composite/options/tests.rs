@@ -38,6 +38,9 @@ edge_color_by = "direction"
 shape = "sphere"
 center = [0.0, 0.25, 0.0]
 radius = 0.5
+
+[cubes]
+size = 0.5
 "#;
 
 #[test]
@@ -79,6 +82,7 @@ fn every_key_sets_its_own_field_and_is_written_back() {
             center: [0.0, 0.25, 0.0],
             radius: 0.5,
         }),
+        cubes: Some(crate::composite::Cubes { size: 0.5 }),
         given: GivenKeys::ALL,
     };
     assert_eq!(o, expect);
