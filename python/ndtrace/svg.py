@@ -20,7 +20,7 @@ import numpy as np
 from . import _ndtrace, annotate
 from ._description import plain
 from ._util import c_array, float32_array, output_done, output_temp
-from .composite import composite, scene_options
+from .composite import scene_options
 from .retina import Retina, trace
 from .scene import Scene
 

@@ -11,8 +11,8 @@ use ndtrace::composite::{
     RetinaExtras, MAX_RETINA_DIM,
 };
 use ndtrace::scene::desc::ColorBy;
-use ndtrace::texture::{colormap, palette};
 use ndtrace::scene::{self, PathError};
+use ndtrace::texture::{colormap, palette};
 use ndtrace::{names, NdError};
 use numpy::{PyArray1, PyArray4, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -372,7 +372,11 @@ fn picture_layout<'py>(
     }
     let cam = camera.map(camera_of).transpose()?;
     let position: Option<Vec<f64>> = match camera {
-        Some(c) => c.get_item("position").ok().map(|p| p.extract()).transpose()?,
+        Some(c) => c
+            .get_item("position")
+            .ok()
+            .map(|p| p.extract())
+            .transpose()?,
         None => None,
     };
     let located = match (&cam, &position) {

@@ -134,8 +134,14 @@ fn direction_key<const N: usize>(d: &Vector<N>) -> Option<([i64; N], f64)> {
     if !(l > 0.0 && l.is_finite()) {
         return None;
     }
-    let sign = d.iter().find(|x| x.abs() > PARALLEL * l).map_or(1.0, |x| x.signum());
-    Some((d.map(|x| (sign * x / l / PARALLEL).round() as i64), sign / l))
+    let sign = d
+        .iter()
+        .find(|x| x.abs() > PARALLEL * l)
+        .map_or(1.0, |x| x.signum());
+    Some((
+        d.map(|x| (sign * x / l / PARALLEL).round() as i64),
+        sign / l,
+    ))
 }
 
 /// The directions of the feature edges (crease angle `angle_degrees`) of every object of
@@ -154,7 +160,10 @@ fn directions<const N: usize>(
             &obj.mesh.simplices,
         )?;
         for &[i, j] in edges.iter() {
-            let d = sub(&obj.mesh.vertices[j as usize], &obj.mesh.vertices[i as usize]);
+            let d = sub(
+                &obj.mesh.vertices[j as usize],
+                &obj.mesh.vertices[i as usize],
+            );
             let Some((key, _)) = direction_key(&d) else {
                 continue;
             };
@@ -184,10 +193,13 @@ fn directions<const N: usize>(
 /// A direction's place in the order of the axes: the axis of its largest component, then the
 /// directions nearer that axis first.
 pub fn axis_order<const N: usize>(v: &Vector<N>) -> f64 {
-    let (axis, big) = v
-        .iter()
-        .enumerate()
-        .fold((0, 0.0f64), |(i, m), (k, x)| if x.abs() > m + 1e-9 { (k, x.abs()) } else { (i, m) });
+    let (axis, big) = v.iter().enumerate().fold((0, 0.0f64), |(i, m), (k, x)| {
+        if x.abs() > m + 1e-9 {
+            (k, x.abs())
+        } else {
+            (i, m)
+        }
+    });
     let l = crate::linalg::norm(v).max(f64::MIN_POSITIVE);
     axis as f64 + (1.0 - big / l)
 }

@@ -48,7 +48,8 @@ pub struct Panel {
     pub rect: Rect,
     /// Its title (`"volume"`, `"x = 0.10"`, `"left"` …), if it has one.
     pub title: Option<String>,
-    /// The band above `rect` the title is written in (with a title).
+    /// The band the title is written in (with a title): above `rect`, except for the stages'
+    /// title of a single view, written over the top of `rect`.
     pub title_band: Option<Rect>,
 }
 
@@ -202,7 +203,19 @@ pub fn picture_layout(
     };
     let stages = stage_title(opts, shape);
     let panels = match layout {
-        ViewLayout::Single => vec![titled(area, stages)],
+        // The stages' title is written over the top margin of the view (the framed object
+        // keeps [`MARGIN`] clear), so the view is the same picture with or without it.
+        ViewLayout::Single => {
+            let band = stages.as_ref().map(|_| Rect {
+                h: band(TITLE_BAND).min(area.h),
+                ..area
+            });
+            vec![Panel {
+                rect: area,
+                title: stages,
+                title_band: band,
+            }]
+        }
         ViewLayout::Stereo => {
             let wl = area.w / 2;
             let half = |x: usize, w: usize| Rect { x, w, ..area };
@@ -215,7 +228,10 @@ pub fn picture_layout(
         ViewLayout::Slice => {
             let wl = area.w / 2;
             let half = |x: usize, w: usize| Rect { x, w, ..area };
-            vec![titled(half(0, wl), None), titled(half(wl, area.w - wl), None)]
+            vec![
+                titled(half(0, wl), None),
+                titled(half(wl, area.w - wl), None),
+            ]
         }
         ViewLayout::Sections => {
             let (wl, ht) = (area.w / 2, area.h / 2);
@@ -231,7 +247,10 @@ pub fn picture_layout(
                 titled(quad(0, 0, wl, ht), Some(view)),
                 titled(quad(wl, 0, area.w - wl, ht), Some(names[0].clone())),
                 titled(quad(0, ht, wl, area.h - ht), Some(names[1].clone())),
-                titled(quad(wl, ht, area.w - wl, area.h - ht), Some(names[2].clone())),
+                titled(
+                    quad(wl, ht, area.w - wl, area.h - ht),
+                    Some(names[2].clone()),
+                ),
             ]
         }
     };
@@ -240,8 +259,10 @@ pub fn picture_layout(
     let axes = opts.axes.resolve(n >= 4).then(|| {
         let r = panels[0].rect;
         let short = r.w.min(r.h) as f64;
-        let side = ((AXES_BOX * short).max(MIN_AXES_BOX).min(MAX_AXES_BOX * short).round()
-            as usize)
+        let side = ((AXES_BOX * short)
+            .max(MIN_AXES_BOX)
+            .min(MAX_AXES_BOX * short)
+            .round() as usize)
             .min(r.w)
             .min(r.h);
         Rect {
@@ -269,7 +290,10 @@ fn stage_title(opts: &CompositeOptions, shape: &[usize]) -> Option<String> {
         return None;
     }
     // The stages collapse the leading numpy axes: retina axes u_m, then u_{m−1}, … u_4.
-    let axes: Vec<String> = (4..=m).rev().map(|k| format!("u{}", subscript(k))).collect();
+    let axes: Vec<String> = (4..=m)
+        .rev()
+        .map(|k| format!("u{}", subscript(k)))
+        .collect();
     let how = if opts.projection == Projection::Orthographic {
         "orthographically".to_string()
     } else if m == 4 {
@@ -279,7 +303,10 @@ fn stage_title(opts: &CompositeOptions, shape: &[usize]) -> Option<String> {
         "in perspective".to_string()
     };
     let which = if axes.len() == 1 { "axis" } else { "axes" };
-    Some(format!("retina {which} {} projected {how}", axes.join(", then ")))
+    Some(format!(
+        "retina {which} {} projected {how}",
+        axes.join(", then ")
+    ))
 }
 
 /// The titles of the three sections (across z, x, y): the section's coordinate in the scene's
@@ -361,8 +388,15 @@ pub fn axis_arrows(
     (0..n)
         .map(|i| {
             // c_k = Σ_r O[r][k] f_i[r]: camera-frame components (the last along the view).
-            let c: Vec<f64> = (0..n).map(|k| (0..n).map(|r| o(r, k) * axis(i, r)).sum()).collect();
-            let len = c.iter().map(|x| x * x).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
+            let c: Vec<f64> = (0..n)
+                .map(|k| (0..n).map(|r| o(r, k) * axis(i, r)).sum())
+                .collect();
+            let len = c
+                .iter()
+                .map(|x| x * x)
+                .sum::<f64>()
+                .sqrt()
+                .max(f64::MIN_POSITIVE);
             // The volume's direction (x = u₁, y = u₂ up, z = u₃) in cell coordinates.
             let d = DVec3::new(c[0], -c[1], if n >= 4 { c[2] } else { 0.0 }) / len;
             AxisArrow {
@@ -393,9 +427,8 @@ const HULL_GRID: usize = 12;
 /// columns), or `None` when no cell is occupied.
 pub fn hull(shape: &[usize], cells: &[[f32; 4]]) -> Option<Hull> {
     let (nx, ny, nz) = (shape[2], shape[1], shape[0]);
-    let (lo, hi) = super::volume::occupied_box([nx, ny, nz], |x, y, z| {
-        cells[x + nx * (y + ny * z)][3]
-    })?;
+    let (lo, hi) =
+        super::volume::occupied_box([nx, ny, nz], |x, y, z| cells[x + nx * (y + ny * z)][3])?;
     // Coarse cells over the box: bins of ⌈extent / HULL_GRID⌉ cells.
     let step: [usize; 3] =
         std::array::from_fn(|k| (((hi[k] - lo[k]) as usize).div_ceil(HULL_GRID)).max(1));
@@ -406,8 +439,7 @@ pub fn hull(shape: &[usize], cells: &[[f32; 4]]) -> Option<Hull> {
             for x in lo[0] as usize..hi[0] as usize {
                 if cells[x + nx * (y + ny * z)][3] > 0.0 {
                     let b = [x, y, z];
-                    let i: [usize; 3] =
-                        std::array::from_fn(|k| (b[k] - lo[k] as usize) / step[k]);
+                    let i: [usize; 3] = std::array::from_fn(|k| (b[k] - lo[k] as usize) / step[k]);
                     occupied[i[0] + bins[0] * (i[1] + bins[1] * i[2])] = true;
                 }
             }
@@ -415,7 +447,11 @@ pub fn hull(shape: &[usize], cells: &[[f32; 4]]) -> Option<Hull> {
     }
     let mut points = Vec::new();
     for (i, _) in occupied.iter().enumerate().filter(|(_, &o)| o) {
-        let b = [i % bins[0], (i / bins[0]) % bins[1], i / (bins[0] * bins[1])];
+        let b = [
+            i % bins[0],
+            (i / bins[0]) % bins[1],
+            i / (bins[0] * bins[1]),
+        ];
         for corner in 0..8 {
             let p: [f64; 3] = std::array::from_fn(|k| {
                 let v = lo[k] + ((b[k] + ((corner >> k) & 1)) * step[k]) as f64;

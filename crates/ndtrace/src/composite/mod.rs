@@ -54,9 +54,9 @@ mod view;
 mod volume;
 
 pub use aids::{Cubes, Cutaway, ViewLayout};
+pub use annotate::{axis_arrows, picture_layout, AxisArrow, Panel, PictureLayout, Rect};
 pub use illustrative::RetinaCamera;
 pub use montage::{slice_layout, Layout, SEPARATOR};
-pub use annotate::{axis_arrows, picture_layout, AxisArrow, Panel, PictureLayout, Rect};
 pub use options::{
     CompositeMode, CompositeOptions, EdgeColorBy, GivenKeys, HiddenEdges, OptionError, Toggle,
     DEFAULT_DISTANCE, MAX_PIXELS, MAX_TITLE_CHARS, MAX_TURNTABLE_FRAMES,

@@ -187,7 +187,11 @@ impl View3 {
             .filter(|_| opts.fit)
             .and_then(|v| box_of(&v.shape, &v.cells))
             .map(|(lo, hi)| {
-                let full = [v_dims(&sections, 2), v_dims(&sections, 1), v_dims(&sections, 0)];
+                let full = [
+                    v_dims(&sections, 2),
+                    v_dims(&sections, 1),
+                    v_dims(&sections, 0),
+                ];
                 (
                     lo.map(|x| (x as usize).saturating_sub(1)),
                     std::array::from_fn(|k| (hi[k] as usize + 1).min(full[k])),

@@ -273,7 +273,10 @@ transform = [{ rotate = { plane = [0, 3], degrees = 20 } }]
     colors.dedup();
     assert_eq!(colors.len(), 4);
     for e in &edges {
-        let d = &dirs.iter().find(|d| d.color.map(|c| c as f32) == e.color).unwrap();
+        let d = &dirs
+            .iter()
+            .find(|d| d.color.map(|c| c as f32) == e.color)
+            .unwrap();
         assert!(d.object == 0);
     }
 }

@@ -116,7 +116,14 @@ pub(super) fn hit_color<const N: usize>(
         Some(_) => scene.camera.depth(hit.t, norm(&ray.dir)),
         None => 0.0,
     };
-    Some(t.color(&o.material.color, &o.mesh, local, &hit.bary, &ray.at(hit.t), depth))
+    Some(t.color(
+        &o.material.color,
+        &o.mesh,
+        local,
+        &hit.bary,
+        &ray.at(hit.t),
+        depth,
+    ))
 }
 
 /// The unit shading normal at a hit on simplex `local` of object `obj`: flat (eq. 6) or

@@ -184,12 +184,14 @@ fn texture_spec(m: &MaterialDesc, path: &str) -> R<Option<crate::texture::Textur
         Some(ColorBy::Cell) => Some(palette(m, path)?),
         _ => None,
     };
-    Ok((colormap.is_some() || isolines.is_some() || lattice.is_some() || by_cell.is_some())
-        .then_some(TextureSpec {
-            colormap,
-            isolines,
-            lattice,
-            by_cell,
-            by_depth,
-        }))
+    Ok(
+        (colormap.is_some() || isolines.is_some() || lattice.is_some() || by_cell.is_some())
+            .then_some(TextureSpec {
+                colormap,
+                isolines,
+                lattice,
+                by_cell,
+                by_depth,
+            }),
+    )
 }

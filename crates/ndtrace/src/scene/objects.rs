@@ -160,7 +160,9 @@ pub(super) fn world_object<const N: usize>(
         .and_then(|t| t.by_cell.as_ref())
         .map(|palette| {
             let classes = crate::texture::cells::cell_classes(&mesh);
-            let colors = (0..classes.normals.len()).map(|k| palette.color(k)).collect();
+            let colors = (0..classes.normals.len())
+                .map(|k| palette.color(k))
+                .collect();
             crate::texture::CellColors { classes, colors }
         });
     if let Some(spec) = &mat.texture {
@@ -260,19 +262,21 @@ pub(super) fn world_object<const N: usize>(
         let depth = (spec.colormap.as_ref())
             .filter(|_| spec.by_depth)
             .map(|(map, range)| (map.clone(), range.unwrap_or([f64::NAN; 2])));
-        let colormap = (spec.colormap.as_ref()).filter(|_| !spec.by_depth).map(|(map, range)| {
-            let range = range.unwrap_or_else(|| {
-                let v = values.as_deref().unwrap_or(&[]);
-                let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-                let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-                if hi > lo {
-                    [lo, hi]
-                } else {
-                    [lo - 1.0, lo + 1.0]
-                }
+        let colormap = (spec.colormap.as_ref())
+            .filter(|_| !spec.by_depth)
+            .map(|(map, range)| {
+                let range = range.unwrap_or_else(|| {
+                    let v = values.as_deref().unwrap_or(&[]);
+                    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+                    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    if hi > lo {
+                        [lo, hi]
+                    } else {
+                        [lo - 1.0, lo + 1.0]
+                    }
+                });
+                (map.clone(), range)
             });
-            (map.clone(), range)
-        });
         let inverse = transpose(&inverse_t);
         crate::texture::Texture {
             values: values.take(),

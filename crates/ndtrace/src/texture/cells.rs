@@ -36,12 +36,18 @@ pub fn cell_classes<const N: usize>(mesh: &Mesh<N>) -> CellClasses<N> {
     let count = mesh.simplices.len();
     let mut pieces = crate::mesh::flat::flat_pieces(mesh, unit, 1);
     if pieces.is_empty() {
-        pieces = (0..count as u32).filter(|&s| unit(s as usize).is_some()).map(|s| vec![s]).collect();
+        pieces = (0..count as u32)
+            .filter(|&s| unit(s as usize).is_some())
+            .map(|s| vec![s])
+            .collect();
     }
     // Pieces in the order of their first simplex, each keyed by its normal up to sign.
     pieces.sort_unstable_by_key(|p| p[0]);
     let key = |n: &Vector<N>| {
-        let sign = n.iter().find(|x| x.abs() > PARALLEL).map_or(1.0, |x| x.signum());
+        let sign = n
+            .iter()
+            .find(|x| x.abs() > PARALLEL)
+            .map_or(1.0, |x| x.signum());
         (sign, n.map(|x| (sign * x / PARALLEL).round() as i64))
     };
     let mut keys: Vec<[i64; N]> = Vec::new();
@@ -89,10 +95,13 @@ pub fn cell_classes<const N: usize>(mesh: &Mesh<N>) -> CellClasses<N> {
 /// the normals nearer that axis first (stable for ties: the sort keeps their first-simplex
 /// order).
 fn order_key<const N: usize>(n: &Vector<N>) -> f64 {
-    let (axis, big) = n
-        .iter()
-        .enumerate()
-        .fold((0, 0.0f64), |(i, m), (k, x)| if x.abs() > m + 1e-9 { (k, x.abs()) } else { (i, m) });
+    let (axis, big) = n.iter().enumerate().fold((0, 0.0f64), |(i, m), (k, x)| {
+        if x.abs() > m + 1e-9 {
+            (k, x.abs())
+        } else {
+            (i, m)
+        }
+    });
     axis as f64 + (1.0 - big)
 }
 

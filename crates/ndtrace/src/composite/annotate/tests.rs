@@ -12,7 +12,10 @@ fn from_table(toml: &str) -> CompositeOptions {
 }
 
 fn inside(r: Rect, outer: Rect) -> bool {
-    r.x >= outer.x && r.y >= outer.y && r.x + r.w <= outer.x + outer.w && r.y + r.h <= outer.y + outer.h
+    r.x >= outer.x
+        && r.y >= outer.y
+        && r.x + r.w <= outer.x + outer.w
+        && r.y + r.h <= outer.y + outer.h
 }
 
 fn overlap(a: Rect, b: Rect) -> bool {
@@ -24,14 +27,30 @@ fn the_sections_layout_titles_four_panels_of_at_least_256_pixels() {
     let o = from_table("layout = \"sections\"\nsection = [0.1, -0.25, 0.5]\n");
     let l = picture_layout(&o, &[64, 64, 64], 1, None);
     assert_eq!(l.size, SECTIONS_SIZE);
-    let whole = Rect { x: 0, y: 0, w: l.size.0, h: l.size.1 };
-    let titles: Vec<&str> = l.panels.iter().map(|p| p.title.as_deref().unwrap()).collect();
+    let whole = Rect {
+        x: 0,
+        y: 0,
+        w: l.size.0,
+        h: l.size.1,
+    };
+    let titles: Vec<&str> = l
+        .panels
+        .iter()
+        .map(|p| p.title.as_deref().unwrap())
+        .collect();
     assert_eq!(titles, ["volume", "u₃ = 0.50", "u₁ = 0.10", "u₂ = −0.25"]);
     for (i, p) in l.panels.iter().enumerate() {
-        assert!(p.rect.w >= 256 && p.rect.h >= 256, "panel {i}: {:?}", p.rect);
+        assert!(
+            p.rect.w >= 256 && p.rect.h >= 256,
+            "panel {i}: {:?}",
+            p.rect
+        );
         let band = p.title_band.unwrap();
         // The title's band lies right above its panel, as wide as it.
-        assert_eq!((band.x, band.w, band.y + band.h), (p.rect.x, p.rect.w, p.rect.y));
+        assert_eq!(
+            (band.x, band.w, band.y + band.h),
+            (p.rect.x, p.rect.w, p.rect.y)
+        );
         assert!(inside(band, whole) && inside(p.rect, whole));
         for q in &l.panels[i + 1..] {
             assert!(!overlap(p.rect, q.rect) && !overlap(band, q.rect));
@@ -44,12 +63,18 @@ fn the_sections_layout_titles_four_panels_of_at_least_256_pixels() {
     assert!(z.x > v.x && z.y == v.y && x.x == v.x && x.y > v.y && y.x == z.x && y.y == x.y);
     // The legend spans the bottom, the glyph sits in the view's lower-left corner.
     let legend = l.legend.unwrap();
-    assert_eq!((legend.x, legend.w, legend.y + legend.h), (0, l.size.0, l.size.1));
+    assert_eq!(
+        (legend.x, legend.w, legend.y + legend.h),
+        (0, l.size.0, l.size.1)
+    );
     let a = l.axes.unwrap();
     assert_eq!((a.x, a.y + a.h), (v.x, v.y + v.h));
     assert!(inside(a, v));
     // Options built in code keep their size; a table that gives one keeps it too.
-    let code = CompositeOptions { layout: ViewLayout::Sections, ..Default::default() };
+    let code = CompositeOptions {
+        layout: ViewLayout::Sections,
+        ..Default::default()
+    };
     assert_eq!(picture_layout(&code, &[8, 8, 8], 0, None).size, (512, 512));
     let sized = from_table("layout = \"sections\"\nsize = [400, 300]\n");
     assert_eq!(picture_layout(&sized, &[8, 8, 8], 0, None).size, (400, 300));
@@ -71,11 +96,18 @@ fn section_titles_are_in_the_scenes_units_for_an_axis_aligned_orthographic_camer
     let position = [0.5, 0.0, -1.0, 4.0];
     let o = from_table("layout = \"sections\"\nsection = [0.5, 0.0, -0.5]\n");
     let l = picture_layout(&o, &[40, 40, 40], 0, Some((&camera, &position)));
-    let titles: Vec<&str> = l.panels.iter().map(|p| p.title.as_deref().unwrap()).collect();
+    let titles: Vec<&str> = l
+        .panels
+        .iter()
+        .map(|p| p.title.as_deref().unwrap())
+        .collect();
     // Volume x = 0.5 is 0.5·20 cells = 10 cells = 0.5 units from the centre, x = 0.5 + 0.5.
     assert_eq!(titles, ["volume", "z = −1.50", "x = 1.00", "y = 0.00"]);
     // A perspective camera keeps the volume's coordinates.
-    let camera = RetinaCamera { perspective: true, ..camera };
+    let camera = RetinaCamera {
+        perspective: true,
+        ..camera
+    };
     let l = picture_layout(&o, &[40, 40, 40], 0, Some((&camera, &position)));
     assert_eq!(l.panels[2].title.as_deref(), Some("u₁ = 0.50"));
 }
@@ -85,7 +117,11 @@ fn stereo_and_stage_titles_caption_and_legend_bands() {
     let o = from_table("layout = \"stereo\"\ntitle = \"A pair\"\n");
     let l = picture_layout(&o, &[32, 32, 32], 2, None);
     assert_eq!(l.size, STEREO_SIZE);
-    let titles: Vec<&str> = l.panels.iter().map(|p| p.title.as_deref().unwrap()).collect();
+    let titles: Vec<&str> = l
+        .panels
+        .iter()
+        .map(|p| p.title.as_deref().unwrap())
+        .collect();
     assert_eq!(titles, ["left", "right"]);
     assert!(l.panels.iter().all(|p| p.rect.w >= 256 && p.rect.h >= 256));
     let caption = l.caption.unwrap();
@@ -96,16 +132,34 @@ fn stereo_and_stage_titles_caption_and_legend_bands() {
     // N = 5: the view's title says what the stage collapses.
     let l = picture_layout(&CompositeOptions::default(), &[8, 8, 8, 8], 0, None);
     let t = l.panels[0].title.clone().unwrap();
-    assert!(t.starts_with("retina axis u₄ projected in perspective (f = "), "{t}");
+    assert!(
+        t.starts_with("retina axis u₄ projected in perspective (f = "),
+        "{t}"
+    );
     // N = 4, one view, no caption or legend: the panel is the picture.
     let l = picture_layout(&CompositeOptions::default(), &[8, 8, 8], 0, None);
-    assert_eq!(l.panels[0].rect, Rect { x: 0, y: 0, w: 512, h: 512 });
+    assert_eq!(
+        l.panels[0].rect,
+        Rect {
+            x: 0,
+            y: 0,
+            w: 512,
+            h: 512
+        }
+    );
     assert!(l.panels[0].title.is_none() && l.caption.is_none() && l.legend.is_none());
     // The glyph by default for N ≥ 4 only, in at most a fifth of the picture.
     let a = l.axes.unwrap();
     assert!((a.w * a.h) as f64 <= 0.2 * 512.0 * 512.0);
-    assert!(picture_layout(&CompositeOptions::default(), &[8, 8], 0, None).axes.is_none());
-    let on = CompositeOptions { axes: crate::composite::Toggle::On, ..Default::default() };
+    assert!(
+        picture_layout(&CompositeOptions::default(), &[8, 8], 0, None)
+            .axes
+            .is_none()
+    );
+    let on = CompositeOptions {
+        axes: crate::composite::Toggle::On,
+        ..Default::default()
+    };
     assert!(picture_layout(&on, &[8, 8], 0, None).axes.is_some());
 }
 
@@ -128,7 +182,11 @@ fn the_glyphs_arrows_point_where_the_cameras_project_the_unit_axes() {
         let cam = Camera {
             position: std::array::from_fn(|k| look[k] - 5.0 * view[k]),
             orientation,
-            projection: if perspective { Projection::Perspective } else { Projection::Orthographic },
+            projection: if perspective {
+                Projection::Perspective
+            } else {
+                Projection::Orthographic
+            },
             cell: 0.05,
             resolution: vec![32, 32, 32],
         };
@@ -163,7 +221,10 @@ fn the_glyphs_arrows_point_where_the_cameras_project_the_unit_axes() {
                 let mut x = look;
                 x[i] += eps;
                 let p = through_cameras(&cam, &opts, &x);
-                ([(p[0] - p0[0]) / eps, (p[1] - p0[1]) / eps], (depth(&look) - depth(&x)) / eps)
+                (
+                    [(p[0] - p0[0]) / eps, (p[1] - p0[1]) / eps],
+                    (depth(&look) - depth(&x)) / eps,
+                )
             })
             .collect();
         // One scale s for every arrow: step_i = s · tip_i.
@@ -173,13 +234,22 @@ fn the_glyphs_arrows_point_where_the_cameras_project_the_unit_axes() {
                 l(a).total_cmp(&l(b))
             })
             .unwrap();
-        let s = steps[big].0[0].hypot(steps[big].0[1]) / arrows[big].tip[0].hypot(arrows[big].tip[1]);
+        let s =
+            steps[big].0[0].hypot(steps[big].0[1]) / arrows[big].tip[0].hypot(arrows[big].tip[1]);
         for i in 0..4 {
             for k in 0..2 {
                 let err = (steps[i].0[k] - s * arrows[i].tip[k]).abs();
-                assert!(err < 1e-4 * s, "trial {trial}, axis {i}: {:?} vs {s} × {:?}", steps[i].0, arrows[i].tip);
+                assert!(
+                    err < 1e-4 * s,
+                    "trial {trial}, axis {i}: {:?} vs {s} × {:?}",
+                    steps[i].0,
+                    arrows[i].tip
+                );
             }
-            assert!((steps[i].1 - arrows[i].toward).abs() < 1e-5, "trial {trial}, axis {i} toward");
+            assert!(
+                (steps[i].1 - arrows[i].toward).abs() < 1e-5,
+                "trial {trial}, axis {i} toward"
+            );
             // An axis in the retina's hyperplane has length 1 before the 3D camera.
             assert!(arrows[i].tip[0].hypot(arrows[i].tip[1]) <= 1.0 + 1e-12);
         }
@@ -194,13 +264,19 @@ fn a_frame_turns_the_glyph_as_the_object() {
     let rot = random_rotation::<4>(&mut r);
     let opts = CompositeOptions::default();
     let flat = |m: &[[f64; 4]; 4]| m.iter().flatten().copied().collect::<Vec<f64>>();
-    let camera = RetinaCamera { orientation: flat(&o), cell: 0.1, perspective: true };
+    let camera = RetinaCamera {
+        orientation: flat(&o),
+        cell: 0.1,
+        perspective: true,
+    };
     let frame: Vec<Vec<f64>> = rot.iter().map(|row| row.to_vec()).collect();
     let turned = axis_arrows(&camera, Some(&frame), &[8, 8, 8], &opts);
-    let rt_o: [[f64; 4]; 4] = std::array::from_fn(|i| {
-        std::array::from_fn(|k| (0..4).map(|j| rot[j][i] * o[j][k]).sum())
-    });
-    let moved = RetinaCamera { orientation: flat(&rt_o), ..camera.clone() };
+    let rt_o: [[f64; 4]; 4] =
+        std::array::from_fn(|i| std::array::from_fn(|k| (0..4).map(|j| rot[j][i] * o[j][k]).sum()));
+    let moved = RetinaCamera {
+        orientation: flat(&rt_o),
+        ..camera.clone()
+    };
     let plain = axis_arrows(&moved, None, &[8, 8, 8], &opts);
     for (a, b) in turned.iter().zip(&plain) {
         assert!((a.tip[0] - b.tip[0]).abs() < 1e-12 && (a.tip[1] - b.tip[1]).abs() < 1e-12);
@@ -216,7 +292,10 @@ fn fit_centres_the_object_with_equal_margins() {
     for z in 0..n {
         for y in 0..n {
             for x in 0..n {
-                let d = ((x as f64 - 5.5).powi(2) + (y as f64 - 6.5).powi(2) + (z as f64 - 16.5).powi(2)).sqrt();
+                let d = ((x as f64 - 5.5).powi(2)
+                    + (y as f64 - 6.5).powi(2)
+                    + (z as f64 - 16.5).powi(2))
+                .sqrt();
                 if d < 4.0 {
                     rgba[((z * n + y) * n + x) * 4..][..4].copy_from_slice(&[1.0, 1.0, 1.0, 1.0]);
                 }
@@ -243,7 +322,10 @@ fn fit_centres_the_object_with_equal_margins() {
         }
         let (left, right) = (lo[0] as i64, 160 - hi[0] as i64);
         let (top, bottom) = (lo[1] as i64, 120 - hi[1] as i64);
-        assert!((left - right).abs() <= 2 && (top - bottom).abs() <= 2, "{azimuth}: {left} {right} {top} {bottom}");
+        assert!(
+            (left - right).abs() <= 2 && (top - bottom).abs() <= 2,
+            "{azimuth}: {left} {right} {top} {bottom}"
+        );
         // And it fills its panel: its width is most of the shorter side.
         assert!(hi[1] - lo[1] > 70, "{:?} {:?}", lo, hi);
     }
@@ -255,8 +337,13 @@ fn the_panels_of_a_caption_and_legend_are_where_the_composite_draws() {
     // background (alpha 0).
     let n = 8;
     let rgba = [1f32, 0.5, 0.25, 1.0].repeat(n * n * n);
-    let o = from_table("mode = \"volume\"\ntitle = \"t\"\nsize = [120, 160]\nbackground = [0.1, 0.2, 0.3]\n");
-    let extras = RetinaExtras { legend_rows: 1, ..Default::default() };
+    let o = from_table(
+        "mode = \"volume\"\ntitle = \"t\"\nsize = [120, 160]\nbackground = [0.1, 0.2, 0.3]\n",
+    );
+    let extras = RetinaExtras {
+        legend_rows: 1,
+        ..Default::default()
+    };
     let img = composite_retina(&rgba, None, &[n, n, n], &extras, &o).unwrap();
     let l = picture_layout(&o, &[n, n, n], 1, None);
     let (cap, leg) = (l.caption.unwrap(), l.legend.unwrap());

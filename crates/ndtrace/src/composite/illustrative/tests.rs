@@ -651,7 +651,10 @@ fn edges_by_depth_are_thicker_and_stronger_near_the_eye_and_by_direction_take_th
     };
     let img = composite_retina(&rgba, None, &shape, &extras, &o).unwrap();
     let p = img.pixel(22, y_of(2.0) as usize);
-    assert!((p[0] - 0.9).abs() < 0.02 && (p[1] - 0.1).abs() < 0.02, "{p:?}");
+    assert!(
+        (p[0] - 0.9).abs() < 0.02 && (p[1] - 0.1).abs() < 0.02,
+        "{p:?}"
+    );
     assert!(width(&img, 22, 2.0) > 1.8 * width(&img, 74, 2.0));
     // None: one width.
     let o = CompositeOptions {

@@ -328,14 +328,29 @@ fn a_bad_value_gets_one_message_whichever_way_it_arrives() {
 
 #[test]
 fn legend_and_axes_take_auto_true_or_false() {
-    for (text, want) in [("\"auto\"", Toggle::Auto), ("true", Toggle::On), ("false", Toggle::Off)] {
-        let o: CompositeOptions = toml::from_str(&format!("legend = {text}\naxes = {text}")).unwrap();
+    for (text, want) in [
+        ("\"auto\"", Toggle::Auto),
+        ("true", Toggle::On),
+        ("false", Toggle::Off),
+    ] {
+        let o: CompositeOptions =
+            toml::from_str(&format!("legend = {text}\naxes = {text}")).unwrap();
         assert_eq!((o.legend, o.axes), (want, want));
-        assert_eq!(toml::to_string(&o).unwrap(), format!("legend = {text}\naxes = {text}\n"));
+        assert_eq!(
+            toml::to_string(&o).unwrap(),
+            format!("legend = {text}\naxes = {text}\n")
+        );
     }
-    let bad = toml::from_str::<CompositeOptions>("legend = \"yes\"").unwrap_err().to_string();
-    assert!(bad.contains("expected \"auto\", true or false, got \"yes\""), "{bad}");
-    let bad = toml::from_str::<CompositeOptions>("axes = 1").unwrap_err().to_string();
+    let bad = toml::from_str::<CompositeOptions>("legend = \"yes\"")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        bad.contains("expected \"auto\", true or false, got \"yes\""),
+        "{bad}"
+    );
+    let bad = toml::from_str::<CompositeOptions>("axes = 1")
+        .unwrap_err()
+        .to_string();
     assert!(bad.contains("\"auto\", true or false"), "{bad}");
     assert!(Toggle::Auto.resolve(true) && !Toggle::Auto.resolve(false));
     assert!(Toggle::On.resolve(false) && !Toggle::Off.resolve(true));
@@ -365,6 +380,10 @@ fn title_and_axes_frame_are_checked() {
     };
     let e = square.validate_for(&[4, 4, 4], false).unwrap_err();
     assert_eq!(e.key, "axes_frame");
-    assert!(e.message.contains("expected 4 rows of 4 numbers"), "{}", e.message);
+    assert!(
+        e.message.contains("expected 4 rows of 4 numbers"),
+        "{}",
+        e.message
+    );
     assert!(square.validate_for(&[4], false).is_ok());
 }

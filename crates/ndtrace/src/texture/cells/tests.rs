@@ -13,7 +13,11 @@ fn the_tesseracts_eight_cubes_fall_in_four_parallel_pairs() {
     let axes: Vec<usize> = c
         .normals
         .iter()
-        .map(|n| n.iter().position(|x| (x.abs() - 1.0).abs() < 1e-12).unwrap())
+        .map(|n| {
+            n.iter()
+                .position(|x| (x.abs() - 1.0).abs() < 1e-12)
+                .unwrap()
+        })
         .collect();
     assert_eq!(axes, vec![0, 1, 2, 3]);
     // The 6 simplices of one cube share a class; 6·8 = 48 simplices in all.
