@@ -49,5 +49,5 @@ def scene() -> ndtrace.Scene:
         # each a relief map of the terrain lit in 4D.
         .set_composite(mode="volume", layout="sections",
                        cutaway={"shape": "box", "min": [0, 0, -1.5], "max": [1.5, 1.5, 0]},
-                       title="A 3D field f as the 4D elevation map w = 0.6 f: cut open, and three sections")
+                       title="A 3D field f as the 4D elevation map w = 0.6 f")
     )

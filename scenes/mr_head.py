@@ -49,5 +49,5 @@ def scene() -> ndtrace.Scene:
                                            "color": [0.9, 0.35, 0.1]}})
         .set_composite(mode="volume", layout="sections",
                        cutaway={"shape": "box", "min": [0, 0, -1.5], "max": [1.5, 1.5, 0]},
-                       title="An MR head as a 4D elevation map: cut open, and three sections")
+                       title="An MR head as a 4D elevation map")
     )
