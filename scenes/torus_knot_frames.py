@@ -43,4 +43,4 @@ def scene() -> ndtrace.Scene:
         s.add_object("mesh", vertices=vertices, simplices=front, material=FRONT, label="+B face")
         s.add_object("mesh", vertices=vertices, simplices=back, material=BACK, label="−B face")
     return s.set_render(samples=4).set_composite(
-        title="Frenet (top left), parallel transport (top right), minimal quaternion length (bottom)")
+        title="Frenet, parallel transport (top); minimal quaternion (bottom)")
