@@ -40,7 +40,7 @@ fn all() -> &'static [Palette] {
                     .map(|w| w.parse().expect("palettes.txt: not a number"))
                     .collect();
                 assert!(
-                    !values.is_empty() && values.len() % 3 == 0,
+                    !values.is_empty() && values.len().is_multiple_of(3),
                     "palettes.txt: {name} needs RGB triples"
                 );
                 Palette {

@@ -87,13 +87,13 @@ fn every_key_sets_its_own_field_and_is_written_back() {
     };
     assert_eq!(o, expect);
     assert_eq!(toml::to_string(&o).unwrap(), EVERY_KEY);
-    // One line per key, the table-valued `cutaway` last as its own section.
+    // One line per key, the table-valued `cutaway` and `cubes` last as their own sections.
     let mut keys: Vec<&str> = EVERY_KEY
         .lines()
         .take_while(|l| !l.is_empty())
         .map(|l| &l[..l.find(' ').unwrap()])
         .collect();
-    keys.push("cutaway");
+    keys.extend(["cutaway", "cubes"]);
     assert_eq!(keys, CompositeOptions::KEYS);
     assert!(CompositeOptions::KEYS.iter().all(|k| o.given.has(k)));
 }
@@ -121,9 +121,9 @@ fn a_table_is_written_back_with_the_keys_it_gave() {
     );
     assert_eq!(toml::to_string(&CompositeOptions::default()).unwrap(), "");
     let every = toml::to_string(&CompositeOptions::default().with_every_key()).unwrap();
-    // TOML has no null: `edge_color`, `axes_frame`, `title` and `cutaway`, None by default,
-    // are left out.
-    assert_eq!(every.lines().count(), CompositeOptions::KEYS.len() - 4);
+    // TOML has no null: `edge_color`, `axes_frame`, `title`, `cutaway` and `cubes`, None by
+    // default, are left out.
+    assert_eq!(every.lines().count(), CompositeOptions::KEYS.len() - 5);
     // (The keys left out are not given when read back.)
     assert_eq!(
         toml::from_str::<CompositeOptions>(&every)
