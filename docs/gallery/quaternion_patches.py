@@ -57,7 +57,7 @@ def main() -> None:
                   font=font)
     draw.text((8, PANEL + label + 6),
               "The frames of a spherical patch (third axis = normal) as quaternions: the "
-              "patch's image in S³, seen by a 4D camera.", fill=(0, 0, 0),
+              "patch's image in S3, seen by a 4D camera.", fill=(0, 0, 0),
               font=ImageFont.load_default(size=15))
     sheet.save(os.path.join(HERE, "quaternion_patches.png"))
 

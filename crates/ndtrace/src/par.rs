@@ -99,7 +99,7 @@ pub fn reduce_chunks_mut<T: Send, R: Send>(
     op: impl Fn(R, R) -> R,
 ) -> R {
     assert!(
-        width > 0 && out.len() % width == 0,
+        width > 0 && out.len().is_multiple_of(width),
         "items of {width} in {}",
         out.len()
     );

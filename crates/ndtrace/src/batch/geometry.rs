@@ -20,6 +20,9 @@ pub enum OnDegenerate {
     Nan,
 }
 
+/// What [`run_items`] runs for item `i`, writing its output row.
+type ItemFn<'a> = dyn Fn(usize, &mut [f64]) -> Result<(), Degenerate> + Sync + 'a;
+
 /// Runs `f(i, out_i)` for every item in parallel; a degenerate item is filled with NaN and,
 /// under [`OnDegenerate::Error`], the first one (by index) becomes the error.
 fn run_items(
@@ -27,7 +30,7 @@ fn run_items(
     out: &mut [f64],
     width: usize,
     on: OnDegenerate,
-    f: &(dyn Fn(usize, &mut [f64]) -> Result<(), Degenerate> + Sync),
+    f: &ItemFn<'_>,
 ) -> NdResult<()> {
     // The first degenerate item of each run of items, then of all: the least index.
     let first = crate::par::reduce_chunks_mut(

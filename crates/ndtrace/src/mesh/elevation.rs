@@ -122,7 +122,7 @@ pub fn elevation_map<const N: usize>(
         ));
     }
     let e = elevation_map_4d(field, extent, height)?;
-    Ok(crate::dim::same(e).ok().expect("N = 4"))
+    Ok(crate::dim::same(e).unwrap_or_else(|_| unreachable!("N = 4")))
 }
 
 /// [`elevation_map`] in R^4, compiled once.
@@ -259,8 +259,7 @@ pub fn gradient_normals<const N: usize>(
 ) -> Vec<Vector<N>> {
     let elev = crate::dim::same_ref::<_, Elevation<4>>(elev).expect("an elevation map is 4D");
     crate::dim::same(gradient_normals_4d(field, elev, height))
-        .ok()
-        .expect("N = 4")
+        .unwrap_or_else(|_| unreachable!("N = 4"))
 }
 
 /// [`gradient_normals`] in R^4, compiled once.

@@ -233,7 +233,7 @@ transform = [{ scale = 0.4 }, { translate = [0.2, 1.3, 0.1, 0.0] }]
 samples = 2
 shading = "gouraud"
 "#;
-    shades_as_one_ray_at_a_time(text, 100, 0);
+    shades_as_one_ray_at_a_time(text, 80, 0);
 }
 
 #[test]

@@ -75,7 +75,7 @@ pub(crate) fn elevation_object<const N: usize>(
         ));
     }
     let e = elevation_object_4d(o, path, base, reader)?;
-    Ok(crate::dim::same(e).ok().expect("N = 4"))
+    Ok(crate::dim::same(e).unwrap_or_else(|_| unreachable!("N = 4")))
 }
 
 /// [`elevation_object`] in R^4, compiled once.
