@@ -174,7 +174,7 @@ fn through_cameras(cam: &Camera<4>, opts: &CompositeOptions, x: &Vector<4>) -> [
 #[test]
 fn the_glyphs_arrows_point_where_the_cameras_project_the_unit_axes() {
     let mut r = rng(48);
-    for trial in 0..40 {
+    for trial in 0..40usize {
         let orientation = random_rotation::<4>(&mut r);
         let look = random_vector::<4>(&mut r, 1.0);
         let view: Vector<4> = std::array::from_fn(|k| orientation[k][3]);
