@@ -28,11 +28,13 @@ def scene(hair: bool = False) -> ndtrace.Scene:
         .add_light("directional", direction=[-0.5, 0.2, 0.3, 1.0], color=[0.3, 0.3, 0.35])
     )
     u_band = (np.arange(len(t)) % (SAMPLES * SAMPLES) // SAMPLES * BANDS // SAMPLES) % 2 == 0
-    for keep, color in ((u_band, [0.95, 0.6, 0.2]), (~u_band, [0.25, 0.5, 0.95])):
+    for keep, color, label in ((u_band, [0.95, 0.6, 0.2], "u in eighths 1, 3, 5, 7"),
+                               (~u_band, [0.25, 0.5, 0.95], "u in eighths 2, 4, 6, 8")):
         if hair:
-            s.add_object("surface", vertices=v, triangles=t[keep], material={"color": color, "specular": 0.5, "shininess": 40, "smooth": True})
+            s.add_object("surface", vertices=v, triangles=t[keep], label=label,
+                         material={"color": color, "specular": 0.5, "shininess": 40, "smooth": True})
             continue
         tv, ts = ndtrace.mesh.thicken_surface(v, t[keep], radius=0.035, segments=12)
-        s.add_object("mesh", vertices=tv, simplices=ts,
+        s.add_object("mesh", vertices=tv, simplices=ts, label=label,
                      material={"color": color, "specular": 0.5, "shininess": 40})
     return s.set_render(samples=4).set_composite(mode="first_hit")

@@ -29,6 +29,6 @@ def scene() -> ndtrace.Scene:
     quarter = (a // (np.pi / 2)).astype(int)
     for q, color in enumerate(COLORS):
         v, t = ndtrace.mesh.thicken_points(p[quarter == q], radius=0.035, subdivisions=3)
-        s.add_object("mesh", vertices=v, simplices=t, material={"color": color, "specular": 0.4, "shininess": 30,
-                                                                       "smooth": True})
+        s.add_object("mesh", vertices=v, simplices=t, label=f"a {90 * q}–{90 * (q + 1)}°",
+                     material={"color": color, "specular": 0.4, "shininess": 30, "smooth": True})
     return s.set_render(samples=4).set_composite(mode="first_hit")

@@ -44,6 +44,7 @@ def scene() -> ndtrace.Scene:
     for k in range(BANDS):
         t = 2 * k / (BANDS - 1)
         color = (1 - t) * WARM + t * MID if t <= 1 else (2 - t) * MID + (t - 1) * COOL
-        s.add_object("mesh", vertices=vertices, simplices=simplices[band == k],
+        label = {0: "start (knot sample 0)", BANDS // 2: "halfway", BANDS - 1: "end"}.get(k)
+        s.add_object("mesh", vertices=vertices, simplices=simplices[band == k], label=label,
                      material={"color": color, "specular": 0.4, "shininess": 40, "smooth": True})
     return s

@@ -25,10 +25,13 @@ def scene(hair: bool = False) -> ndtrace.Scene:
         .add_light("directional", direction=[-0.5, 0.2, 0.3, 1.0], color=[0.3, 0.3, 0.35])
     )
     sheet = v[t, 2].mean(axis=1) > 0
-    for keep, color in ((sheet, [0.95, 0.55, 0.2]), (~sheet, [0.3, 0.55, 0.95])):
+    for keep, color, label in ((sheet, [0.95, 0.55, 0.2], "sheet Re w > 0"),
+                               (~sheet, [0.3, 0.55, 0.95], "sheet Re w < 0")):
         if hair:
-            s.add_object("surface", vertices=v, triangles=t[keep], material={"color": color, "specular": 0.5, "shininess": 40, "smooth": True})
+            s.add_object("surface", vertices=v, triangles=t[keep], label=label,
+                         material={"color": color, "specular": 0.5, "shininess": 40, "smooth": True})
             continue
         tv, ts = ndtrace.mesh.thicken_surface(v, t[keep], radius=0.02, segments=10)
-        s.add_object("mesh", vertices=tv, simplices=ts, material={"color": color, "specular": 0.5, "shininess": 40})
+        s.add_object("mesh", vertices=tv, simplices=ts, label=label,
+                     material={"color": color, "specular": 0.5, "shininess": 40})
     return s.set_render(samples=4).set_composite(mode="first_hit")

@@ -31,11 +31,14 @@ def scene(hair: bool = False) -> ndtrace.Scene:
         .add_light("directional", direction=[-0.5, 0.2, 0.3, 1.0], color=[0.3, 0.3, 0.35])
     )
     near = np.abs(theta[t]).mean(axis=1) < np.pi / 2  # the half of the sphere with cos θ > 0
-    for keep, color in ((near, [0.95, 0.55, 0.2]), (~near, [0.3, 0.55, 0.95])):
+    for keep, color, label in ((near, [0.95, 0.55, 0.2], "spin angle θ near 0"),
+                               (~near, [0.3, 0.55, 0.95], "θ near π")):
         if hair:
-            s.add_object("surface", vertices=v, triangles=t[keep], material={"color": color, "specular": 0.5, "shininess": 40, "smooth": True})
+            s.add_object("surface", vertices=v, triangles=t[keep], label=label,
+                         material={"color": color, "specular": 0.5, "shininess": 40, "smooth": True})
             continue
         tv, ts = ndtrace.mesh.thicken_surface(v, t[keep], radius=0.035, segments=10)
-        s.add_object("mesh", vertices=tv, simplices=ts, material={"color": color, "specular": 0.5, "shininess": 40})
+        s.add_object("mesh", vertices=tv, simplices=ts, label=label,
+                     material={"color": color, "specular": 0.5, "shininess": 40})
     # Cut away the near half of the retina volume so the profile — the knotted arc — shows inside.
     return s.set_render(samples=4).set_composite(mode="first_hit", cutaway={"shape": "half_space", "normal": [0, 0, -1], "offset": 0.0})

@@ -40,6 +40,7 @@ def scene() -> ndtrace.Scene:
         .add_light("directional", direction=[0.3, -0.4, 1.0], color=[0.85, 0.85, 0.8])
     )
     for vertices, front, back in ribbons():
-        s.add_object("mesh", vertices=vertices, simplices=front, material=FRONT)
-        s.add_object("mesh", vertices=vertices, simplices=back, material=BACK)
-    return s.set_render(samples=4)
+        s.add_object("mesh", vertices=vertices, simplices=front, material=FRONT, label="+B face")
+        s.add_object("mesh", vertices=vertices, simplices=back, material=BACK, label="−B face")
+    return s.set_render(samples=4).set_composite(
+        title="Frenet, parallel transport (top); minimal quaternion (bottom)")

@@ -58,7 +58,7 @@ def test_first_hit_of_a_traced_tesseract_shows_the_nearest_cells(tesseract):
     bg = (0.2, 0.3, 0.4)
     size = (96, 80)
     img = ndtrace.composite(tesseract, mode="first_hit", projection="orthographic", azimuth=0,
-                            elevation=0, size=size, background=bg, fit=False)
+                            elevation=0, size=size, background=bg, fit=False, axes=False)
     assert img.shape == (80, 96, 4) and img.dtype == np.float32 and img.flags.c_contiguous
     occupied = rgba[..., 3] > 0
     straight = np.where(occupied[..., None], rgba[..., :3] / np.maximum(rgba[..., 3:], 1e-30), np.nan)
@@ -88,7 +88,7 @@ def test_first_hit_of_a_traced_tesseract_shows_the_nearest_cells(tesseract):
 
 def test_volume_picture_has_the_object_in_the_middle(tesseract):
     bg = np.array([0.05, 0.1, 0.15])
-    img = ndtrace.composite(tesseract, size=(64, 48), background=bg)
+    img = ndtrace.composite(tesseract, size=(64, 48), background=bg, axes=False)
     alpha = img[..., 3]
     # Drawn from the scene (the default), the illustrative interior is nearly clear, the
     # creases and contours behind the centre inked: well covered, not opaque.
@@ -101,13 +101,13 @@ def test_volume_picture_has_the_object_in_the_middle(tesseract):
     ys, xs = np.nonzero(alpha > 0.01)
     assert abs((ys.min() + ys.max()) / 2 - 23.5) < 8 and abs((xs.min() + xs.max()) / 2 - 31.5) < 8
     # RGB = C + (1 − A)·bg: with a black background the colour is C itself.
-    black = ndtrace.composite(tesseract, size=(64, 48))
+    black = ndtrace.composite(tesseract, size=(64, 48), axes=False)
     np.testing.assert_allclose(img[..., :3], black[..., :3] + (1 - black[..., 3:]) * bg, atol=1e-6)
     np.testing.assert_array_equal(img[..., 3], black[..., 3])
 
 
 def test_raw_arrays_and_retinas_give_the_same_picture(tesseract):
-    a = ndtrace.composite(tesseract, mode="mip", size=(40, 30))
+    a = ndtrace.composite(tesseract, mode="mip", size=(40, 30), axes=False)  # a raw array has no camera for the glyph
     b = ndtrace.composite(tesseract.rgba, mode="mip", size=(40, 30))
     c = ndtrace.composite(tesseract.rgba.astype(np.float64).tolist(), mode="mip", size=(40, 30))
     np.testing.assert_array_equal(a, b)
@@ -193,7 +193,19 @@ def test_five_d_retina_constant_along_the_hidden_axis_reduces_to_one_slice():
     rgba5 = np.ascontiguousarray(np.broadcast_to(slice4, (4, *slice4.shape)))
     for mode in ["volume", "first_hit", "slices"]:
         kw = dict(mode=mode, projection="orthographic", size=(50, 40), azimuth=20, elevation=30)
-        np.testing.assert_array_equal(ndtrace.composite(rgba5, **kw), ndtrace.composite(slice4, **kw))
+        five = ndtrace.composite(rgba5, **kw)
+        if mode == "slices":
+            np.testing.assert_array_equal(five, ndtrace.composite(slice4, **kw))
+            continue
+        # The 5D view is the 4D view, its title (the axis the stage collapses) written over its
+        # top margin: below that band the pictures are equal.
+        layout = ndtrace._ndtrace.picture_layout(list(rgba5.shape[:-1]), kw)
+        (panel,) = layout["panels"]
+        assert panel["title"] == "retina axis u₄ projected orthographically"
+        assert panel["rect"] == {"x": 0, "y": 0, "w": 50, "h": 40}
+        band = panel["title_band"]["h"]
+        four = ndtrace.composite(slice4, **kw)
+        np.testing.assert_array_equal(five[band:], four[band:])
     # Perspective stages shrink far slices instead; stages must match N − 4.
     persp = ndtrace.composite(rgba5, size=(50, 40), stages=[(2.5, 3.0)])
     assert persp.shape == (40, 50, 4)

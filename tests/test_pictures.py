@@ -55,12 +55,17 @@ def test_turntable_range_is_checked(tesseract):
 
 def test_stereo_halves_are_the_two_eyes_views(tesseract):
     _, retina = tesseract
-    pair = ndtrace.composite(retina, size=(81, 40), layout="stereo", stereo_angle=8.0, azimuth=20.0)
-    assert pair.shape == (40, 81, 4)
-    left = ndtrace.composite(retina, size=(40, 40), azimuth=16.0)
-    right = ndtrace.composite(retina, size=(41, 40), azimuth=24.0)
-    np.testing.assert_array_equal(pair[:, :40], left)
-    np.testing.assert_array_equal(pair[:, 40:], right)
+    kw = dict(size=(81, 60), layout="stereo", stereo_angle=8.0, azimuth=20.0, axes=False)
+    pair = ndtrace.composite(retina, **kw)
+    assert pair.shape == (60, 81, 4)
+    # Each half is its eye's view, under its title.
+    left, right = ndtrace._ndtrace.picture_layout(list(retina.shape), kw)["panels"]
+    assert (left["title"], right["title"]) == ("left", "right")
+    for panel, azimuth in ((left, 16.0), (right, 24.0)):
+        r = panel["rect"]
+        view = ndtrace.composite(retina, size=(r["w"], r["h"]), azimuth=azimuth, axes=False)
+        np.testing.assert_array_equal(pair[r["y"]:r["y"] + r["h"], r["x"]:r["x"] + r["w"]], view)
+    assert (left["rect"]["x"], right["rect"]["x"], right["rect"]["w"]) == (0, 40, 41)
 
 
 def test_sections_show_the_view_and_the_cells_through_the_point():
@@ -70,15 +75,20 @@ def test_sections_show_the_view_and_the_cells_through_the_point():
     r = np.zeros((n, n, n, 4), np.float32)
     for z in range(n):
         r[z] = [z / n, 0.2, 1 - z / n, 1.0]
-    pic = ndtrace.composite(r, mode="volume", size=(64, 64), layout="sections", fit=False)
-    view = ndtrace.composite(r, mode="volume", size=(32, 32), fit=False)
-    np.testing.assert_array_equal(pic[:32, :32], view)
-    across_z = pic[:32, 32:]
-    np.testing.assert_allclose(across_z[16, 16, :3], [8 / n, 0.2, 1 - 8 / n], atol=1e-6)
-    across_x = pic[32:, :32]  # z to the right: colour changes along columns
-    assert across_x[16, 2, 0] < across_x[16, 29, 0]
-    across_y = pic[32:, 32:]  # z down: colour changes along rows
-    assert across_y[2, 16, 0] < across_y[29, 16, 0]
+    kw = dict(mode="volume", size=(128, 128), layout="sections", fit=False)
+    pic = ndtrace.composite(r, **kw)
+    panels = ndtrace._ndtrace.picture_layout([n, n, n], kw)["panels"]
+    v, z, x, y = ({k: p["rect"][k] for k in "xywh"} for p in panels)
+    tile = lambda q: pic[q["y"]:q["y"] + q["h"], q["x"]:q["x"] + q["w"]]  # noqa: E731
+    view = ndtrace.composite(r, mode="volume", size=(v["w"], v["h"]), fit=False)
+    np.testing.assert_array_equal(tile(v), view)
+    across_z = tile(z)
+    np.testing.assert_allclose(across_z[z["h"] // 2, z["w"] // 2, :3], [8 / n, 0.2, 1 - 8 / n], atol=1e-6)
+    across_x = tile(x)  # z to the right: colour changes along columns
+    mid = x["h"] // 2
+    assert across_x[mid, x["w"] // 2 - 20, 0] < across_x[mid, x["w"] // 2 + 20, 0]
+    across_y = tile(y)  # z down: colour changes along rows
+    assert across_y[y["h"] // 2 - 20, y["w"] // 2, 0] < across_y[y["h"] // 2 + 20, y["w"] // 2, 0]
     with pytest.raises(ValueError, match="section"):
         ndtrace.composite(r, layout="sections", section=(0, float("nan"), 0))
 
@@ -170,7 +180,8 @@ def test_svg_opens_and_its_lines_lie_on_the_composite_edges(tesseract, tmp_path)
     scene, retina = tesseract
     size = (160, 160)
     path = tmp_path / "t.svg"
-    ndtrace.write_svg(path, scene, fill=False, size=size, hidden_edges="none")
+    # The edges' geometry, one width (depth styling apart: the SVG weights a piece at its middle).
+    ndtrace.write_svg(path, scene, fill=False, size=size, hidden_edges="none", axes=False, edge_color_by="none")
     text = path.read_text()
     root = ET.fromstring(text)
     ns = "{http://www.w3.org/2000/svg}"
@@ -178,7 +189,7 @@ def test_svg_opens_and_its_lines_lie_on_the_composite_edges(tesseract, tmp_path)
     assert len(paths) >= 20 and root.get("width") == "160"
     drawn = _svg_pixels(text).max(axis=2) > 0.5
     # The raster composite's edge layer: where drawing the edges changed the picture.
-    with_edges = ndtrace.composite(retina, size=size, hidden_edges="none")
+    with_edges = ndtrace.composite(retina, size=size, hidden_edges="none", edge_color_by="none")
     without = ndtrace.composite(retina, size=size, edges=False)
     raster = np.abs(with_edges - without)[..., :3].max(axis=2) > 0.1  # faded behind dense cells: > 0.1
     assert drawn.sum() > 300 and raster.sum() > 300

@@ -118,7 +118,7 @@ def tesseracts():
 @pytest.mark.parametrize("res", [32, 128])
 def test_first_hit_silhouette_is_the_exact_one_antialiased(tesseracts, res):
     scene, retina = tesseracts[res]
-    opts = dict(mode="first_hit", opacity=1.0, edges=False, size=SIZE)
+    opts = dict(mode="first_hit", opacity=1.0, edges=False, size=SIZE, axes=False)
     pic = ndtrace.composite(retina, **opts)
     poly = exact_silhouette(scene, retina, size=SIZE)
     sd, cov = coverage(poly, *SIZE)
@@ -136,14 +136,14 @@ def test_first_hit_silhouette_is_the_exact_one_antialiased(tesseracts, res):
 
 def test_default_composite_has_no_halo(tesseracts):
     scene, retina = tesseracts[32]
-    pic = ndtrace.composite(retina, size=SIZE)
+    pic = ndtrace.composite(retina, size=SIZE, axes=False)
     poly = exact_silhouette(scene, retina, size=SIZE)
     y, x = np.mgrid[:SIZE[1], :SIZE[0]] + 0.5
     sd = signed_distance(poly, x, y)
     area = (sd < 0).sum()
     glow = ((pic[..., 3] > 0) & (sd > 1.5)).sum()
     assert glow <= 0.001 * area, f"alpha beyond 1.5 px over {glow / area:.2%} of the object's area"
-    grid = ndtrace.composite(retina, size=SIZE, detail="retina")
+    grid = ndtrace.composite(retina, size=SIZE, detail="retina", axes=False)
     assert ((grid[..., 3] > 0) & (sd > 1.5)).sum() > 0.001 * area
 
 
@@ -181,9 +181,15 @@ def test_isolines_of_a_linear_field_are_straight_in_a_section():
     def middle_line(detail):
         """Rows of the section across z with three dark runs, and the middle run's centres'
         largest distance from their straight-line fit."""
-        pic = ndtrace.composite(retina, layout="sections", size=(1024, 1024), mode="volume",
-                                background=[1, 1, 1], detail=detail)
-        dark = pic[:512, 512:, :3].mean(axis=-1) < 0.25  # the tile across z
+        options = dict(layout="sections", size=(1024, 1024), mode="volume", background=[1, 1, 1],
+                       detail=detail, axes=False)
+        pic = ndtrace.composite(retina, **options)
+        from ndtrace import _ndtrace
+        from ndtrace._description import plain
+
+        r = _ndtrace.picture_layout(list(retina.shape), plain(options))["panels"][1]["rect"]
+        tile = pic[r["y"]:r["y"] + r["h"], r["x"]:r["x"] + r["w"], :3]  # the section across z
+        dark = tile.mean(axis=-1) < 0.25
         centres = []
         for r in np.nonzero(dark.any(axis=1))[0]:
             xs = np.nonzero(dark[r])[0]
@@ -219,7 +225,7 @@ def test_point_blobs_at_equal_depth_have_equal_areas():
              .add_object("mesh", vertices=v, simplices=t, material={"color": [0.9, 0.6, 0.3]}))
     retina = ndtrace.trace(scene)
     opts = dict(mode="first_hit", projection="orthographic", azimuth=0.0, elevation=0.0, size=(512, 512),
-                fit=False)
+                fit=False, axes=False)
 
     def areas(pic):
         alpha = pic[..., 3]

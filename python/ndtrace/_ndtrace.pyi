@@ -1,6 +1,6 @@
 """Type stubs of the compiled extension. Use the ``ndtrace`` package, not this module."""
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from types import ModuleType
 from typing import Any, Protocol, final
 
@@ -104,6 +104,8 @@ class CompiledScene:
     def edge_segments(self, angle: float) -> dict[str, npt.NDArray[np.generic]]: ...
     def retina_edges(self, angle: float) -> npt.NDArray[np.float64]: ...
     def retina_camera(self) -> dict[str, Any]: ...
+    def legend_info(self) -> list[dict[str, Any]]: ...
+    def edge_directions(self, angle: float) -> list[dict[str, Any]]: ...
 
 class _MeshReader(Protocol):
     """``reader(path, dim)`` reads a mesh file; ``reader.field(path)`` a 3D field (NIfTI)."""
@@ -185,6 +187,10 @@ def feature_edges(
 
 COMPOSITE_MODES: tuple[str, ...]
 PROJECTIONS: tuple[str, ...]
+EDGE_COLOR_BY: tuple[str, ...]
+COLOR_BY: tuple[str, ...]
+COLORMAPS: tuple[str, ...]
+PALETTES: tuple[str, ...]
 
 def composite(
     rgba: npt.NDArray[np.float32],
@@ -196,6 +202,7 @@ def composite(
     edges: npt.NDArray[np.float64] | None = None,
     scene: CompiledScene | None = None,
     object_id: npt.NDArray[np.int32] | None = None,
+    legend_rows: int = 0,
 ) -> npt.NDArray[np.float32]: ...
 def picture_edges(
     rgba: npt.NDArray[np.float32],
@@ -207,8 +214,19 @@ def picture_edges(
     edges: npt.NDArray[np.float64] | None = None,
     scene: CompiledScene | None = None,
     object_id: npt.NDArray[np.int32] | None = None,
+    legend_rows: int = 0,
 ) -> npt.NDArray[np.float64]: ...
 def composite_defaults() -> dict[str, Any]: ...
 def check_composite(options: dict[str, object], name: str) -> None: ...
 def check_picture_memory(shape: list[int], options: dict[str, object] | None) -> None: ...
 def check_memory(bytes: float, what: str) -> None: ...
+def picture_layout(
+    shape: Sequence[int], options: dict[str, object] | None = None, legend_rows: int = 0,
+    camera: dict[str, object] | None = None,
+) -> dict[str, Any]: ...
+def axis_arrows(
+    shape: Sequence[int], camera: dict[str, object], options: dict[str, object] | None = None,
+    frame: Sequence[Sequence[float]] | None = None,
+) -> list[dict[str, Any]]: ...
+def colormap_table(name: str) -> list[tuple[float, float, float]]: ...
+def palette_colors(name: str) -> list[tuple[float, float, float]]: ...

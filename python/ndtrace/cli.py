@@ -40,7 +40,7 @@ from ._ndtrace import __version__
 from ._optional import install
 from .animation import animate, write_frames
 from .cluster import check_address, connect, distributed_module
-from .composite import scene_options
+from .composite import COLOR_BY, EDGE_COLOR_BY, PALETTES, scene_options
 from .files import IMAGE_FORMATS, write_exr, write_image
 from .retina import trace
 from .scene import Scene, load_dict
@@ -132,6 +132,18 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument("--turntable", type=int, metavar="F",
                    help="with -o .gif/.mp4 (or .png: numbered frames): F frames of the compositing "
                    "camera orbiting one traced retina")
+    p.add_argument("--title", metavar="TEXT", help="a caption line above the picture (composite.title)")
+    p.add_argument("--legend", choices=("auto", "true", "false"),
+                   help="the colour bar and keys along the bottom: when the scene has a colormap, "
+                   "color_by or labels (auto, the default), always or never")
+    p.add_argument("--axes", choices=("auto", "true", "false"),
+                   help="the N-D axes glyph in the view's lower-left corner (auto: for N ≥ 4)")
+    p.add_argument("--edge-color-by", choices=EDGE_COLOR_BY,
+                   help="the feature edges: by N-D depth (the default), by direction, or one colour")
+    p.add_argument("--color-by", choices=COLOR_BY,
+                   help="every object's material.color_by: a palette colour per cell, per object, "
+                   "or the N-D depth through a colormap")
+    p.add_argument("--palette", choices=PALETTES, help="every object's material.palette (default tab10)")
     p.add_argument("--slice", metavar="AXIS=OFFSET|NORMAL:OFFSET",
                    help="render the (N−1)-D slice by a hyperplane: w=0.3 (an axis: x, y, z, w or "
                         "x0 … x7) or 1,0,0,1:0.5 (normal and offset); sets [slice]")
@@ -239,6 +251,15 @@ def _composite_flags(args: argparse.Namespace) -> dict:
         flags.append(("--cutaway", {"cutaway": _cutaway(args.cutaway)}))
     if args.turntable is not None:
         flags.append(("--turntable", {"turntable": args.turntable}))
+    if args.title is not None:
+        flags.append(("--title", {"title": args.title}))
+    toggle = {"auto": "auto", "true": True, "false": False}
+    if args.legend is not None:
+        flags.append(("--legend", {"legend": toggle[args.legend]}))
+    if args.axes is not None:
+        flags.append(("--axes", {"axes": toggle[args.axes]}))
+    if args.edge_color_by is not None:
+        flags.append(("--edge-color-by", {"edge_color_by": args.edge_color_by}))
     keys: dict = {}
     for flag, values in flags:
         _ndtrace.check_composite(values, flag)
@@ -340,6 +361,10 @@ def run(argv: list[str] | None = None) -> int:
         render["seed"] = args.seed
     if args.mode:
         render["mode"] = args.mode
+    for key, value in (("color_by", args.color_by), ("palette", args.palette)):
+        if value is not None:
+            for o in data.get("objects") or []:
+                o["material"] = {**(o.get("material") or {}), key: value}
     if args.slice is not None:
         data["slice"] = slice_flag(args.slice, int(data["dim"]))
     comp = {**(data.get("composite") or {}), **_composite_flags(args)}

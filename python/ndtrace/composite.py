@@ -12,15 +12,29 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from . import _ndtrace
+from . import _ndtrace, annotate
 from ._description import plain
 from ._util import float32_array
 from .retina import Retina
 
-__all__ = ["composite", "scene_options", "MODES", "PROJECTIONS"]
+__all__ = ["composite", "scene_options", "picture_size", "MODES", "PROJECTIONS", "LEGEND", "AXES",
+           "EDGE_COLOR_BY", "COLOR_BY", "PALETTES", "COLORMAPS"]
 
 MODES: tuple[str, ...] = tuple(_ndtrace.COMPOSITE_MODES)
 PROJECTIONS: tuple[str, ...] = tuple(_ndtrace.PROJECTIONS)
+#: The values of ``legend`` and ``axes``: shown when they help, always, never.
+LEGEND: tuple[str | bool, ...] = ("auto", True, False)
+AXES: tuple[str | bool, ...] = LEGEND
+#: The values of ``edge_color_by``.
+EDGE_COLOR_BY: tuple[str, ...] = tuple(_ndtrace.EDGE_COLOR_BY)
+#: The values of a material's ``color_by``, and its palettes and colormaps.
+COLOR_BY: tuple[str, ...] = tuple(_ndtrace.COLOR_BY)
+PALETTES: tuple[str, ...] = tuple(_ndtrace.PALETTES)
+COLORMAPS: tuple[str, ...] = tuple(_ndtrace.COLORMAPS)
+
+#: The default ``size``: (512, 512), or for a sections or stereo layout a picture whose panels
+#: keep more than 256 pixels (the core's ``picture_size``). A caller's own (512, 512) is kept.
+_DEFAULT_SIZE: tuple[int, int] = (512, 512)
 
 
 def composite(
@@ -31,7 +45,7 @@ def composite(
     elevation: float = 20.0,
     distance: float = 4.0,
     projection: str = "perspective",
-    size: tuple[int, int] | None = (512, 512),
+    size: tuple[int, int] | None = _DEFAULT_SIZE,
     opacity: float = 1.0,
     depth_cue: float = 0.0,
     axis: int = 0,
@@ -55,6 +69,11 @@ def composite(
     stereo_angle: float = 6.0,
     cutaway: dict | None = None,
     turntable: int = 0,
+    legend: str | bool = "auto",
+    axes: str | bool = "auto",
+    axes_frame: Sequence[Sequence[float]] | None = None,
+    title: str | None = None,
+    edge_color_by: str = "depth",
     cubes: dict | None = None,
     threads: int | None = None,
 ) -> np.ndarray:
@@ -107,7 +126,9 @@ def composite(
       fills the shorter side (tan(fov/2) = 1/√(distance² − 1)), so a larger distance only
       flattens the perspective; orthographic views span the sphere and ignore it.
     * ``projection`` ["perspective"] — or ``"orthographic"``; also used by every N ≥ 5 stage.
-    * ``size`` [(512, 512)] — (W, H) pixels; None: native size for N ≤ 3, (512, 512) otherwise.
+    * ``size`` [(512, 512); 720 × 720 for ``layout="sections"``, 960 × 540 for ``"stereo"``]
+      — (W, H) pixels of the whole picture (panels, titles and legend included); None: native
+      size for N ≤ 3, the default otherwise.
     * ``opacity`` [1.0] — multiplies every cell's alpha (and premultiplied colour; alpha clamped
       to 1) so inner structure shows through; e.g. 0.05 turns a solid traced body translucent.
     * ``depth_cue`` [0.0] — in [0, 1]: tints each cell by its N-D depth, warm (near) to cool
@@ -162,6 +183,28 @@ def composite(
       shaded by a headlight.
     * ``turntable`` [0] — F > 0 returns F frames, frame k seen from ``azimuth + 360°·k/F``:
       motion parallax for the price of one trace (the retina is prepared once).
+    * ``legend`` ["auto"] — a strip along the bottom: a colour bar per colormap (its name,
+      range, ticks and the isoline levels marked) and keys of the colours of ``color_by``, of
+      the objects' labels and of edges coloured by direction; "auto" shows it when the
+      scene has one of those (a Retina traced from a scene: a raw array has no legend), True
+      and False force it.
+    * ``axes`` ["auto" = for N ≥ 4] — the N-D axes glyph in the lower-left corner of the view:
+      the world axes x, y, z, w (then x5 …) as arrows through the N-D camera, the stages and
+      the compositing camera (``ndtrace._ndtrace.axis_arrows``), each shortened by its part
+      along lines of sight and dimmed (dashed) as it points away from the N-D eye. Needs the
+      retina's camera (a Retina).
+    * ``axes_frame`` [None = the world axes] — N rows of N numbers: the glyph shows its columns
+      (the viewer passes its rotation, so the glyph turns with the object).
+    * ``title`` [None] — a caption line above the picture. Panels have their own titles
+      (sections: "volume" and each section's coordinate, in the scene's units for an
+      axis-aligned orthographic camera; stereo: "left", "right"; N ≥ 5: the axes the
+      stages collapse).
+    * ``edge_color_by`` ["depth"] — the feature edges: "depth" (the course's depth cueing:
+      thicker and stronger near the N-D eye, thinner and fainter far from it), "direction"
+      (parallel edges share a colour of the object's ``material.palette``, keyed in the
+      legend) or "none" (one colour and width).
+    Text is drawn at the picture's resolution, anti-aliased, in the DejaVu Sans subset shipped
+    with ndtrace (:mod:`ndtrace.annotate`).
     * ``threads`` [None = every core] — the picture is bit-identical whatever the number.
 
     Raises ValueError naming the argument on bad input.
@@ -186,14 +229,21 @@ def composite(
         threads = int(threads)
     shape = rgba.shape[:-1]
     if size is None:  # the native size of a 2D or 1D retina
-        size = (shape[1], shape[0]) if len(shape) == 2 else (shape[0], strip_height) if len(shape) == 1 else (512, 512)
+        size = (shape[1], shape[0]) if len(shape) == 2 else (shape[0], strip_height) if len(shape) == 1 else _DEFAULT_SIZE
     options = dict(mode=mode, azimuth=azimuth, elevation=elevation, distance=distance, zoom=zoom,
-                   projection=projection, size=size, opacity=opacity, step=step,
+                   projection=projection, opacity=opacity, step=step,
                    rays_per_cell=rays_per_cell, samples=samples, detail=detail, depth_cue=depth_cue,
                    axis=axis, strip_height=strip_height, labels=labels, fit=fit,
                    crease_angle=crease_angle, edges=edges, edge_width=edge_width,
                    hidden_edges=hidden_edges, layout=layout, section=section,
-                   stereo_angle=stereo_angle, turntable=turntable)
+                   stereo_angle=stereo_angle, turntable=turntable, legend=legend, axes=axes,
+                   edge_color_by=edge_color_by)
+    if size is not _DEFAULT_SIZE:  # else the layout's default
+        options["size"] = size
+    if title is not None:
+        options["title"] = title
+    if axes_frame is not None:
+        options["axes_frame"] = np.asarray(axes_frame, dtype=float).tolist()
     if cutaway is not None:
         options["cutaway"] = cutaway
     if cubes is not None:
@@ -213,7 +263,39 @@ def composite(
     if isinstance(retina, Retina) and detail == "scene" and retina._source is not None and len(shape) == 3:
         source = retina._source
         objects = np.ascontiguousarray(retina.object_id, dtype=np.int32)
-    return _ndtrace.composite(rgba, depth, plain(options), threads, normal, camera, lines, source, objects)
+    given = plain(options)
+    rows = annotate.legend_rows(retina, options)
+    picture = _ndtrace.composite(rgba, depth, given, threads, normal, camera, lines, source, objects,
+                                 len(rows))
+    return _annotate(picture, retina, shape, options, rows)
+
+
+def _annotate(picture: np.ndarray, retina, shape: tuple[int, ...], options: dict,
+              rows: list) -> np.ndarray:
+    """Draws the caption, panel titles, legend and axes glyph into the composite (every frame
+    of a turntable, each with its own glyph)."""
+    camera = retina._camera_info() if isinstance(retina, Retina) else None
+    layout = _ndtrace.picture_layout(list(shape), plain(options), len(rows), camera)
+    titled = options.get("title") is not None or any(p["title"] for p in layout["panels"])
+    glyph = layout["axes"] is not None and camera is not None
+    if not (titled or rows or glyph):
+        return picture
+    background = options.get("background")
+    background = (0.0, 0.0, 0.0) if background is None else tuple(float(v) for v in background)
+    turntable = int(options.get("turntable") or 0)
+    frames = picture if turntable else picture[None]
+    for k, frame in enumerate(frames):
+        o = dict(options, azimuth=float(options["azimuth"]) + 360.0 * k / turntable) if turntable else options
+        arrows = _ndtrace.axis_arrows(list(shape), camera, plain(o)) if glyph and camera else None
+        annotate.draw(frame, annotate.items(layout, rows, arrows, o, background))
+    return picture
+
+
+def picture_size(shape: Sequence[int], options: dict) -> tuple[int, int]:
+    """The size of the picture :func:`composite` makes of a retina of numpy ``shape`` with the
+    keywords ``options``: their ``size``, or the default of their ``layout``."""
+    w, h = _ndtrace.picture_layout(list(shape), plain(options))["size"]
+    return int(w), int(h)
 
 
 def scene_options(description: dict) -> dict:

@@ -17,10 +17,10 @@ import os
 
 import numpy as np
 
-from . import _ndtrace
+from . import _ndtrace, annotate
 from ._description import plain
 from ._util import c_array, float32_array, output_done, output_temp
-from .composite import composite, scene_options
+from .composite import scene_options
 from .retina import Retina, trace
 from .scene import Scene
 
@@ -67,14 +67,18 @@ def svg_text(scene_or_retina, *, fill: bool = True, threads: int | None = None, 
     angle = float(opts.get("crease_angle", 20.0))
     hidden = opts.get("hidden_edges", "dashed")
     keys = {k: v for k, v in opts.items() if v is not None}
+    rgba = float32_array("retina.rgba", retina.rgba)
+    depth = float32_array("retina.depth", retina.depth)
+    normal = float32_array("retina.normal", retina.normal)
+    camera = retina._camera_info()
     source = retina._source if keys.get("detail", "scene") == "scene" and retina.rgba.ndim == 4 else None
     objects = np.ascontiguousarray(retina.object_id, dtype=np.int32) if source is not None else None
-    rows = np.asarray(_ndtrace.picture_edges(
-        float32_array("retina.rgba", retina.rgba), float32_array("retina.depth", retina.depth), plain(keys),
-        threads, float32_array("retina.normal", retina.normal), retina._camera_info(), retina._edges(angle),
-        source, objects))
-    defaults = _ndtrace.composite_defaults()
-    w, h = (int(v) for v in (opts.get("size") or defaults["size"]))
+    rows = annotate.legend_rows(retina, keys)
+    given = plain(keys)
+    edges = np.asarray(_ndtrace.picture_edges(rgba, depth, given, threads, normal, camera,
+                                              retina._edges(angle), source, objects, len(rows)))
+    layout = _ndtrace.picture_layout(list(retina.shape), given, len(rows), camera)
+    w, h = (int(v) for v in layout["size"])
     width = float(opts.get("edge_width") or 0.0) or max(1.0, min(w, h) / 300.0)
     bg = opts.get("background") or [0.0, 0.0, 0.0]
     out = [
@@ -87,7 +91,9 @@ def svg_text(scene_or_retina, *, fill: bool = True, threads: int | None = None, 
     if fill:
         from PIL import Image
 
-        picture = composite(retina, threads=threads, **{**opts, "edges": False})
+        # The composite without its edges and without its annotations (drawn below as vectors).
+        picture = _ndtrace.composite(rgba, depth, plain({**keys, "edges": False}), threads, normal,
+                                     camera, None, source, objects, len(rows))
         buf = io.BytesIO()
         Image.fromarray(_ndtrace.to_srgb8(c_array(picture, np.float32), True)).save(buf, "PNG")
         data = base64.b64encode(buf.getvalue()).decode("ascii")
@@ -95,7 +101,7 @@ def svg_text(scene_or_retina, *, fill: bool = True, threads: int | None = None, 
                    f'href="data:image/png;base64,{data}" xlink:href="data:image/png;base64,{data}"/>')
 
     def layer(visible: bool) -> list[str]:
-        pieces = rows[rows[:, 9] == (1.0 if visible else 0.0)] if len(rows) else rows
+        pieces = edges[edges[:, 9] == (1.0 if visible else 0.0)] if len(edges) else edges
         if not len(pieces):
             return []
         if visible:
@@ -106,14 +112,24 @@ def svg_text(scene_or_retina, *, fill: bool = True, threads: int | None = None, 
                      + (f' stroke-dasharray="{DASH[0]} {DASH[1]}"' if hidden == "dashed" else ""))
             name = "hidden"
         lines = [f'<g id="{name}-edges" fill="none" stroke-linecap="round" {style}>']
-        for x0, y0, x1, y1, _d0, _d1, r, g, b, _v in pieces:
-            lines.append(f'<path d="M{x0:.2f} {y0:.2f}L{x1:.2f} {y1:.2f}" stroke="{_hex((r, g, b))}"/>')
+        for x0, y0, x1, y1, _d0, _d1, r, g, b, _v, scale, strength in pieces:
+            weight = "" if scale == 1.0 and strength == 1.0 else (
+                f' stroke-width="{scale * (width if visible else HIDDEN_WIDTH * width):.3g}"'
+                + (f' opacity="{strength:.3g}"' if strength != 1.0 else ""))
+            lines.append(f'<path d="M{x0:.2f} {y0:.2f}L{x1:.2f} {y1:.2f}" stroke="{_hex((r, g, b))}"{weight}/>')
         lines.append("</g>")
         return lines
 
     if hidden != "none":
         out += layer(False)
     out += layer(True)
+    arrows = (_ndtrace.axis_arrows(list(retina.shape), camera, given)
+              if layout["axes"] is not None and camera is not None else None)
+    drawing = annotate.items(layout, rows, arrows, keys, bg)
+    if drawing:
+        out.append('<g id="annotations">')
+        out += annotate.svg_elements(drawing)
+        out.append("</g>")
     out.append("</svg>")
     return "\n".join(out) + "\n"
 
@@ -127,7 +143,9 @@ def write_svg(path: str | os.PathLike, scene, *, fill: bool = True, threads: int
     :func:`ndtrace.composite` (the scene's ``[composite]`` table by default; ``mode``,
     ``layout`` and ``turntable`` do not apply), notably ``size``, ``azimuth``, ``elevation``,
     ``crease_angle``, ``hidden_edges`` (``"dashed"``, ``"faint"`` or ``"none"``), ``edge_width``,
-    ``edge_color`` and ``depth_cue`` (stroke colour by N-D depth, warm near to cool far). Each
+    ``edge_color``, ``edge_color_by`` and ``depth_cue`` (stroke colour and width by N-D depth or
+    direction, as the raster), ``title``, ``legend`` and ``axes`` (SVG text, a gradient and
+    lines in the group ``annotations``). Each
     piece of an edge is one ``<path>``; the hidden pieces (group ``hidden-edges``) are drawn
     beneath the visible ones (group ``visible-edges``). ``fill`` embeds the raster composite
     without its edges beneath them (a PNG), which fills the object's silhouette; False gives a

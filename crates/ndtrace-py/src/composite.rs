@@ -9,16 +9,18 @@ use crate::scene::CompiledScene;
 use ndtrace::camera::Projection;
 use ndtrace::composite::SceneProbe;
 use ndtrace::composite::{
-    self as core, CompositeMode, CompositeOptions, RetinaCamera, RetinaEdge, RetinaExtras,
-    MAX_RETINA_DIM,
+    self as core, CompositeMode, CompositeOptions, EdgeColorBy, RetinaCamera, RetinaEdge,
+    RetinaExtras, MAX_RETINA_DIM,
 };
 use ndtrace::render::probe::ScenePicture;
+use ndtrace::scene::desc::ColorBy;
 use ndtrace::scene::{self, PathError};
+use ndtrace::texture::{colormap, palette};
 use ndtrace::{names, with_scene, NdError};
 use numpy::{PyArray1, PyArray4, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyTuple;
+use pyo3::types::{PyDict, PyList, PyTuple};
 
 type Arr<'py> = PyReadonlyArrayDyn<'py, f32>;
 
@@ -36,6 +38,7 @@ struct Input<'a> {
     camera: Option<RetinaCamera>,
     edges: Vec<RetinaEdge>,
     object: Option<&'a [i32]>,
+    legend_rows: usize,
 }
 
 impl Input<'_> {
@@ -46,6 +49,7 @@ impl Input<'_> {
             edges: &self.edges,
             object: self.object,
             scene: None,
+            legend_rows: self.legend_rows,
         }
     }
 }
@@ -67,6 +71,15 @@ fn with_probe<T>(
             f(&probed)
         }),
     }
+}
+
+/// The camera of a dict with `orientation` (N×N row-major floats), `cell` and `perspective`.
+fn camera_of(c: &Bound<'_, PyAny>) -> PyResult<RetinaCamera> {
+    Ok(RetinaCamera {
+        orientation: c.get_item("orientation")?.extract()?,
+        cell: c.get_item("cell")?.extract()?,
+        perspective: c.get_item("perspective")?.extract()?,
+    })
 }
 
 /// The options of the dict (None: every default), errors naming the key.
@@ -136,24 +149,17 @@ fn input<'a>(
         }
         None => None,
     };
-    let camera = match camera {
-        Some(c) => Some(RetinaCamera {
-            orientation: c.get_item("orientation")?.extract()?,
-            cell: c.get_item("cell")?.extract()?,
-            perspective: c.get_item("perspective")?.extract()?,
-        }),
-        None => None,
-    };
+    let camera = camera.map(camera_of).transpose()?;
     let edges: Vec<RetinaEdge> = match edges {
         None => Vec::new(),
         Some(e) => {
-            let width = 2 * m + 3;
+            let width = 2 * m + 6;
             let flat = e.as_slice().map_err(|_| {
                 PyValueError::new_err("edges: expected a C-contiguous float64 array")
             })?;
             if m > MAX_RETINA_DIM || flat.len() % width != 0 {
                 return Err(PyValueError::new_err(format!(
-                    "edges: expected rows of {width} floats (two ends of {m} coordinates, two depths, visible)"
+                    "edges: expected rows of {width} floats (two ends of {m} coordinates, two depths, visible, RGB)"
                 )));
             }
             flat.chunks_exact(width)
@@ -163,6 +169,7 @@ fn input<'a>(
                         b: [0.0; MAX_RETINA_DIM],
                         depth: [r[2 * m], r[2 * m + 1]],
                         visible: r[2 * m + 2] != 0.0,
+                        color: [r[2 * m + 3], r[2 * m + 4], r[2 * m + 5]].map(|c| c as f32),
                     };
                     e.a[..m].copy_from_slice(&r[..m]);
                     e.b[..m].copy_from_slice(&r[m..2 * m]);
@@ -193,6 +200,7 @@ fn input<'a>(
         camera,
         edges,
         object,
+        legend_rows: 0,
     })
 }
 
@@ -202,11 +210,12 @@ fn input<'a>(
 ///
 /// `normal` (the retina's `(..., N)` float32 normals), `camera` (a dict with `orientation`,
 /// N×N row-major floats, `cell` and `perspective`) and `edges` (float64 rows
-/// `[a (N−1), b (N−1), depth_a, depth_b, visible]`) are what the illustrative mode uses;
-/// `scene` (the `CompiledScene` the retina was traced from) and `object_id` (its int32
-/// objects) what a picture drawn at its own resolution uses (`detail = "scene"`, N = 4).
+/// `[a (N−1), b (N−1), depth_a, depth_b, visible, r, g, b]`) are what the illustrative mode
+/// uses; `scene` (the `CompiledScene` the retina was traced from) and `object_id` (its int32
+/// objects) what a picture drawn at its own resolution uses (`detail = "scene"`, N = 4);
+/// `legend_rows` rows of legend are left free at the bottom (see `picture_layout`).
 #[pyfunction]
-#[pyo3(signature = (rgba, depth=None, options=None, threads=None, normal=None, camera=None, edges=None, scene=None, object_id=None))]
+#[pyo3(signature = (rgba, depth=None, options=None, threads=None, normal=None, camera=None, edges=None, scene=None, object_id=None, legend_rows=0))]
 #[allow(clippy::too_many_arguments)]
 fn composite<'py>(
     py: Python<'py>,
@@ -219,9 +228,11 @@ fn composite<'py>(
     edges: Option<PyReadonlyArrayDyn<'py, f64>>,
     scene: Option<Bound<'py, CompiledScene>>,
     object_id: Option<PyReadonlyArrayDyn<'py, i32>>,
+    legend_rows: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
     let opts = options_arg(options)?;
-    let inp = input(&rgba, &depth, &normal, camera, &edges, &object_id)?;
+    let mut inp = input(&rgba, &depth, &normal, camera, &edges, &object_id)?;
+    inp.legend_rows = legend_rows;
     let extras = inp.extras();
     let pool = crate::thread_pool(threads)?;
     let frames = opts.turntable;
@@ -299,11 +310,11 @@ fn check_memory(bytes: f64, what: &str) -> PyResult<()> {
 }
 
 /// The feature-edge pieces the illustrative picture of `options` draws (one view), as float64
-/// rows `[x0, y0, x1, y1, depth0, depth1, r, g, b, visible]`: ends in picture pixels (x right,
-/// y down), their N-D depths, the piece's linear RGB (at its middle's depth) as the picture
-/// draws it.
+/// rows `[x0, y0, x1, y1, depth0, depth1, r, g, b, visible, width, opacity]`: ends in picture
+/// pixels (x right, y down), their N-D depths, the piece's linear RGB, its width (times the
+/// edge width) and its strength as the picture draws them at its middle's depth.
 #[pyfunction]
-#[pyo3(signature = (rgba, depth=None, options=None, threads=None, normal=None, camera=None, edges=None, scene=None, object_id=None))]
+#[pyo3(signature = (rgba, depth=None, options=None, threads=None, normal=None, camera=None, edges=None, scene=None, object_id=None, legend_rows=0))]
 #[allow(clippy::too_many_arguments)]
 fn picture_edges<'py>(
     py: Python<'py>,
@@ -316,9 +327,11 @@ fn picture_edges<'py>(
     edges: Option<PyReadonlyArrayDyn<'py, f64>>,
     scene: Option<Bound<'py, CompiledScene>>,
     object_id: Option<PyReadonlyArrayDyn<'py, i32>>,
+    legend_rows: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
     let opts = options_arg(options)?;
-    let inp = input(&rgba, &depth, &normal, camera, &edges, &object_id)?;
+    let mut inp = input(&rgba, &depth, &normal, camera, &edges, &object_id)?;
+    inp.legend_rows = legend_rows;
     let extras = inp.extras();
     let pool = crate::thread_pool(threads)?;
     let compiled = scene.as_ref().map(|b| b.get());
@@ -338,7 +351,9 @@ fn picture_edges<'py>(
     let flat: Vec<f64> = pieces
         .iter()
         .flat_map(|e| {
-            let c = colors.at(0.5 * (e.depth[0] + e.depth[1]));
+            let mid = 0.5 * (e.depth[0] + e.depth[1]);
+            let c = colors.at(e, mid);
+            let (width, strength) = colors.weight(mid);
             [
                 e.p[0][0],
                 e.p[0][1],
@@ -350,11 +365,13 @@ fn picture_edges<'py>(
                 f64::from(c[1]),
                 f64::from(c[2]),
                 f64::from(u8::from(e.visible)),
+                width,
+                f64::from(strength),
             ]
         })
         .collect();
     Ok(PyArray1::from_vec(py, flat)
-        .reshape([count, 10])?
+        .reshape([count, 12])?
         .into_any())
 }
 
@@ -384,9 +401,128 @@ fn check_composite(options: &Bound<'_, PyAny>, name: &str) -> PyResult<()> {
     opts.validate().map_err(|e| located(&e.key, e.message))
 }
 
+/// A rectangle as a dict `{x, y, w, h}`.
+fn rect<'py>(py: Python<'py>, r: &core::Rect) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("x", r.x)?;
+    d.set_item("y", r.y)?;
+    d.set_item("w", r.w)?;
+    d.set_item("h", r.h)?;
+    Ok(d)
+}
+
+/// Where everything of the picture of `options` goes, for a retina of numpy `shape` with
+/// `legend_rows` rows of legend: a dict with `size` (W, H), `text` (the text size, pixels),
+/// `caption`, `legend` and `axes` (rectangles `{x, y, w, h}` or None) and `panels` (each
+/// `{rect, title, title_band}`). `camera` (as for `composite`, with the camera's `position`)
+/// gives the sections' titles in the scene's units where it can.
+#[pyfunction]
+#[pyo3(signature = (shape, options=None, legend_rows=0, camera=None))]
+fn picture_layout<'py>(
+    py: Python<'py>,
+    shape: Vec<usize>,
+    options: Option<&Bound<'py, PyAny>>,
+    legend_rows: usize,
+    camera: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let opts = options_arg(options)?;
+    if !(1..=7).contains(&shape.len()) || shape.contains(&0) {
+        return Err(PyValueError::new_err(format!(
+            "shape: a retina has 1 to 7 axes of at least one cell, got {shape:?}"
+        )));
+    }
+    let cam = camera.map(camera_of).transpose()?;
+    let position: Option<Vec<f64>> = match camera {
+        Some(c) => c
+            .get_item("position")
+            .ok()
+            .map(|p| p.extract())
+            .transpose()?,
+        None => None,
+    };
+    let located = match (&cam, &position) {
+        (Some(c), Some(p)) => Some((c, p.as_slice())),
+        _ => None,
+    };
+    let l = core::picture_layout(&opts, &shape, legend_rows, located);
+    let d = PyDict::new(py);
+    d.set_item("size", l.size)?;
+    d.set_item("text", l.text)?;
+    let opt_rect = |r: &Option<core::Rect>| -> PyResult<Bound<'py, PyAny>> {
+        match r {
+            Some(r) => Ok(rect(py, r)?.into_any()),
+            None => Ok(py.None().into_bound(py)),
+        }
+    };
+    d.set_item("caption", opt_rect(&l.caption)?)?;
+    d.set_item("legend", opt_rect(&l.legend)?)?;
+    d.set_item("axes", opt_rect(&l.axes)?)?;
+    let panels = PyList::empty(py);
+    for p in &l.panels {
+        let e = PyDict::new(py);
+        e.set_item("rect", rect(py, &p.rect)?)?;
+        e.set_item("title", p.title.clone())?;
+        e.set_item("title_band", opt_rect(&p.title_band)?)?;
+        panels.append(e)?;
+    }
+    d.set_item("panels", panels)?;
+    Ok(d)
+}
+
+/// The N-D axes glyph's arrows (see the core's `composite::axis_arrows`) for a retina of
+/// numpy `shape`, its `camera` (as for `composite`) and the options: a list of dicts with
+/// the axis' `label`, its `tip` (x right, y down, at most 1 long) and `toward` (−1 … 1, how
+/// far it points toward the N-D eye). `frame` (N rows of N numbers, default the identity)
+/// has the axes shown as its columns; without it the options' `axes_frame`.
+#[pyfunction]
+#[pyo3(signature = (shape, camera, options=None, frame=None))]
+fn axis_arrows<'py>(
+    py: Python<'py>,
+    shape: Vec<usize>,
+    camera: &Bound<'py, PyAny>,
+    options: Option<&Bound<'py, PyAny>>,
+    frame: Option<Vec<Vec<f64>>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let opts = options_arg(options)?;
+    let cam = camera_of(camera)?;
+    let frame = frame.or_else(|| opts.axes_frame.clone());
+    let list = PyList::empty(py);
+    for a in core::axis_arrows(&cam, frame.as_deref(), &shape, &opts) {
+        let e = PyDict::new(py);
+        e.set_item("label", a.label)?;
+        e.set_item("tip", a.tip.to_vec())?;
+        e.set_item("toward", a.toward)?;
+        list.append(e)?;
+    }
+    Ok(list)
+}
+
+/// The 256 linear-RGB entries of the colormap `name` (`_r` reversed), as the tracer maps values.
+#[pyfunction]
+fn colormap_table(name: &str) -> PyResult<Vec<[f64; 3]>> {
+    colormap::get(name).map(|m| m.table).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "unknown colormap \"{name}\" (known: {}; \"_r\" reverses one)",
+            colormap::names().join(", ")
+        ))
+    })
+}
+
+/// The linear-RGB colours of the qualitative palette `name`.
+#[pyfunction]
+fn palette_colors(name: &str) -> PyResult<Vec<[f64; 3]>> {
+    palette::get(name).map(|p| p.colors).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "unknown palette \"{name}\" (known: {})",
+            palette::names().join(", ")
+        ))
+    })
+}
+
 /// Adds `composite`, `composite_defaults`, `check_composite`, the memory checks
-/// (`check_picture_memory`, `check_memory`) and the names of the composite
-/// modes and projections (`COMPOSITE_MODES`, `PROJECTIONS`).
+/// (`check_picture_memory`, `check_memory`), `picture_layout`, `axis_arrows`, the colour tables and the names of the composite modes, projections, edge colourings,
+/// `color_by` values, colormaps and palettes (`COMPOSITE_MODES`, `PROJECTIONS`,
+/// `EDGE_COLOR_BY`, `COLOR_BY`, `COLORMAPS`, `PALETTES`).
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add_function(wrap_pyfunction!(composite, m)?)?;
@@ -395,6 +531,17 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check_composite, m)?)?;
     m.add_function(wrap_pyfunction!(check_picture_memory, m)?)?;
     m.add_function(wrap_pyfunction!(check_memory, m)?)?;
+    m.add_function(wrap_pyfunction!(picture_layout, m)?)?;
+    m.add_function(wrap_pyfunction!(axis_arrows, m)?)?;
+    m.add_function(wrap_pyfunction!(colormap_table, m)?)?;
+    m.add_function(wrap_pyfunction!(palette_colors, m)?)?;
+    m.add(
+        "EDGE_COLOR_BY",
+        PyTuple::new(py, names::variants::<EdgeColorBy>())?,
+    )?;
+    m.add("COLOR_BY", PyTuple::new(py, names::variants::<ColorBy>())?)?;
+    m.add("COLORMAPS", PyTuple::new(py, colormap::names())?)?;
+    m.add("PALETTES", PyTuple::new(py, palette::names())?)?;
     m.add(
         "COMPOSITE_MODES",
         PyTuple::new(py, names::variants::<CompositeMode>())?,

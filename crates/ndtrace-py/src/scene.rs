@@ -17,6 +17,17 @@ use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::time::Duration;
 
+/// The colormap's name as the material gave it (with its `_r`), else the core's.
+fn colormap_name(m: &ndtrace::scene::desc::MaterialDesc, base: &str) -> String {
+    match &m.colormap {
+        Some(name) => name.clone(),
+        None if m.color_by == Some(ndtrace::scene::desc::ColorBy::Depth) => {
+            ndtrace::scene::DEPTH_COLORMAP.to_string()
+        }
+        None => base.to_string(),
+    }
+}
+
 /// A validated scene with its BVH, built once and reused by every trace.
 #[pyclass(module = "ndtrace._ndtrace", frozen)]
 pub struct CompiledScene {
@@ -103,7 +114,8 @@ impl CompiledScene {
     }
 
     /// The feature-edge pieces in retina coordinates (`ndtrace.composite`'s `edges`): float64
-    /// rows `[a (N−1), b (N−1), depth_a, depth_b, visible]`, flat.
+    /// rows `[a (N−1), b (N−1), depth_a, depth_b, visible, r, g, b]` (the colour of the
+    /// edge's direction, linear RGB), flat.
     fn retina_edges<'py>(
         &self,
         py: Python<'py>,
@@ -115,11 +127,12 @@ impl CompiledScene {
             .into_iter()
             .flat_map(|e| {
                 let m = _N - 1;
-                let mut r = Vec::with_capacity(2 * m + 3);
+                let mut r = Vec::with_capacity(2 * m + 6);
                 r.extend_from_slice(&e.a[..m]);
                 r.extend_from_slice(&e.b[..m]);
                 r.extend_from_slice(&e.depth);
                 r.push(f64::from(u8::from(e.visible)));
+                r.extend(e.color.map(f64::from));
                 r
             })
             .collect::<Vec<f64>>());
@@ -141,8 +154,99 @@ impl CompiledScene {
                 "perspective",
                 c.projection == ndtrace::camera::Projection::Perspective,
             )?;
+            d.set_item("position", c.position.to_vec())?;
         });
         Ok(d)
+    }
+
+    /// What the picture's legend says of each object: a list of dicts with its `label`, its
+    /// `color` (linear RGB, after `color_by = "object"`), `color_by`, `palette`, `colormap`
+    /// (`{"name", "range", "of": "values" | "depth"}`), `isolines` (`{"values", "color"}`)
+    /// and, for `color_by = "cell"`, `cells` (per direction of cells: its `normal` in the
+    /// object's own axes, the `count` of cells and their `color`) and `cell_class` (per
+    /// simplex, the index of its direction in `cells`; `2³² − 1` for a degenerate one).
+    fn legend_info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyList>> {
+        let list = pyo3::types::PyList::empty(py);
+        with_scene!(&self.scene, s, _N => {
+            for (k, (o, d)) in s.objects.iter().zip(&self.desc.objects).enumerate() {
+                let item = PyDict::new(py);
+                item.set_item("index", k)?;
+                item.set_item("label", d.label.clone())?;
+                item.set_item("shape", pythonize::pythonize(py, &d.shape).map_err(|e| PyValueError::new_err(e.to_string()))?)?;
+                item.set_item("color", o.material.color.to_vec())?;
+                let color_by = o.material.color_by.map(|c| {
+                    ndtrace::names::variants::<ndtrace::scene::desc::ColorBy>()[c as usize]
+                });
+                item.set_item("color_by", color_by)?;
+                item.set_item("palette", o.material.palette.name)?;
+                let t = o.texture.as_ref();
+                let map = t.and_then(|t| {
+                    t.depth.as_ref().map(|(m, r)| (m, r, "depth"))
+                        .or(t.colormap.as_ref().map(|(m, r)| (m, r, "values")))
+                });
+                match map {
+                    Some((m, r, of)) => {
+                        let c = PyDict::new(py);
+                        c.set_item("name", colormap_name(&d.material, m.name))?;
+                        c.set_item("range", r.to_vec())?;
+                        c.set_item("of", of)?;
+                        item.set_item("colormap", c)?;
+                    }
+                    None => item.set_item("colormap", py.None())?,
+                }
+                match t.and_then(|t| t.isolines.as_ref()) {
+                    Some(i) => {
+                        let c = PyDict::new(py);
+                        c.set_item("values", i.values.clone())?;
+                        c.set_item("color", i.color.to_vec())?;
+                        item.set_item("isolines", c)?;
+                    }
+                    None => item.set_item("isolines", py.None())?,
+                }
+                match t.and_then(|t| t.cells.as_ref()) {
+                    Some(c) => {
+                        let cells = pyo3::types::PyList::empty(py);
+                        for ((n, count), color) in c.classes.normals.iter().zip(&c.classes.cells).zip(&c.colors) {
+                            let e = PyDict::new(py);
+                            e.set_item("normal", n.to_vec())?;
+                            e.set_item("count", *count)?;
+                            e.set_item("color", color.to_vec())?;
+                            cells.append(e)?;
+                        }
+                        item.set_item("cells", cells)?;
+                        item.set_item("cell_class", numpy::PyArray1::from_vec(py, c.classes.class.clone()))?;
+                    }
+                    None => {
+                        item.set_item("cells", py.None())?;
+                        item.set_item("cell_class", py.None())?;
+                    }
+                }
+                list.append(item)?;
+            }
+        });
+        Ok(list)
+    }
+
+    /// The directions of the feature edges (crease angle `angle`, degrees), for the legend of
+    /// `edge_color_by = "direction"`: a list of dicts with the unit direction `own` in the
+    /// object's own axes, the `object` and the `color` (linear RGB).
+    fn edge_directions<'py>(
+        &self,
+        py: Python<'py>,
+        angle: f64,
+    ) -> PyResult<Bound<'py, pyo3::types::PyList>> {
+        let list = pyo3::types::PyList::empty(py);
+        with_scene!(&self.scene, s, _N => {
+            let dirs = py.detach(|| guarded("edge_directions", || ndtrace::edges::edge_directions(s, angle)))?;
+            for d in dirs {
+                let e = PyDict::new(py);
+                e.set_item("own", d.own.to_vec())?;
+                e.set_item("object", d.object)?;
+                e.set_item("color", d.color.to_vec())?;
+                list.append(e)?;
+            }
+        });
+        Ok(list)
     }
 
     /// The description as TOML.

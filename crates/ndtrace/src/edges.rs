@@ -34,7 +34,7 @@
 use crate::camera::Camera;
 use crate::camera::Projection;
 use crate::composite::{RetinaEdge, MAX_RETINA_DIM};
-use crate::linalg::{dot, mat_vec, sub, transpose, Vector};
+use crate::linalg::{dot, mat_vec, sub, transpose, Rgb, Vector};
 use crate::ray::Ray;
 use crate::scene::Scene;
 use crate::NdResult;
@@ -111,6 +111,111 @@ pub fn edge_segments<const N: usize>(
     Ok(out)
 }
 
+/// One direction of a scene's feature edges (`composite.edge_color_by = "direction"`): the
+/// edges parallel to it share its colour.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EdgeDirection<const N: usize> {
+    /// The unit direction in the own space of the first object with such an edge (the sign
+    /// making its first component beyond 10⁻⁶ positive): the tesseract's are its own axes.
+    pub own: Vector<N>,
+    /// That object.
+    pub object: u32,
+    /// The colour: that object's `material.palette` colour of the direction's index.
+    pub color: Rgb,
+}
+
+/// Relative rounding of the directions that count as parallel.
+const PARALLEL: f64 = 1e-6;
+
+/// The key of the line of direction `d` (parallel lines, either way, share it), or `None` for
+/// a zero vector.
+fn direction_key<const N: usize>(d: &Vector<N>) -> Option<([i64; N], f64)> {
+    let l = crate::linalg::norm(d);
+    if !(l > 0.0 && l.is_finite()) {
+        return None;
+    }
+    let sign = d
+        .iter()
+        .find(|x| x.abs() > PARALLEL * l)
+        .map_or(1.0, |x| x.signum());
+    Some((
+        d.map(|x| (sign * x / l / PARALLEL).round() as i64),
+        sign / l,
+    ))
+}
+
+/// The directions of the feature edges (crease angle `angle_degrees`) of every object of
+/// `scene`, numbered in the order of their first edge (object by object, in
+/// [`crate::mesh::feature_edges`] order), with their keys.
+fn directions<const N: usize>(
+    scene: &Scene<N>,
+    angle_degrees: f64,
+) -> NdResult<Vec<([i64; N], EdgeDirection<N>)>> {
+    let mut out: Vec<([i64; N], EdgeDirection<N>)> = Vec::new();
+    for (o, obj) in scene.objects.iter().enumerate() {
+        let edges = scene.edge_cache.feature_edges(
+            o,
+            angle_degrees,
+            &obj.mesh.vertices,
+            &obj.mesh.simplices,
+        )?;
+        for &[i, j] in edges.iter() {
+            let d = sub(
+                &obj.mesh.vertices[j as usize],
+                &obj.mesh.vertices[i as usize],
+            );
+            let Some((key, _)) = direction_key(&d) else {
+                continue;
+            };
+            if out.iter().any(|(k, _)| *k == key) {
+                continue;
+            }
+            let own = mat_vec(&obj.own_from_world, &d);
+            let (_, s) = direction_key(&own).unwrap_or(([0; N], 0.0));
+            out.push((
+                key,
+                EdgeDirection {
+                    own: own.map(|x| x * s),
+                    object: o as u32,
+                    color: [0.0; 3],
+                },
+            ));
+        }
+    }
+    // In the order of the axes they are nearest (a tesseract's x, y, z, w), then coloured.
+    out.sort_by(|a, b| axis_order(&a.1.own).total_cmp(&axis_order(&b.1.own)));
+    for (k, (_, d)) in out.iter_mut().enumerate() {
+        d.color = scene.objects[d.object as usize].material.palette.color(k);
+    }
+    Ok(out)
+}
+
+/// A direction's place in the order of the axes: the axis of its largest component, then the
+/// directions nearer that axis first.
+pub fn axis_order<const N: usize>(v: &Vector<N>) -> f64 {
+    let (axis, big) = v.iter().enumerate().fold((0, 0.0f64), |(i, m), (k, x)| {
+        if x.abs() > m + 1e-9 {
+            (k, x.abs())
+        } else {
+            (i, m)
+        }
+    });
+    let l = crate::linalg::norm(v).max(f64::MIN_POSITIVE);
+    axis as f64 + (1.0 - big / l)
+}
+
+/// The directions of the feature edges of `scene` (see [`EdgeDirection`]), in the order of
+/// their first edge: what the legend of `edge_color_by = "direction"` keys.
+pub fn edge_directions<const N: usize>(
+    scene: &Scene<N>,
+    angle_degrees: f64,
+) -> NdResult<Vec<EdgeDirection<N>>> {
+    Ok(directions(scene, angle_degrees)?
+        .into_iter()
+        .map(|(_, d)| d)
+        .collect())
+}
+
 /// The pieces of [`edge_segments`] in retina coordinates, for the compositor
 /// ([`crate::composite::RetinaExtras::edges`]): each piece clipped to the camera's view (the
 /// hidden pieces may leave it), its ends as continuous numpy-order cell coordinates
@@ -124,6 +229,12 @@ pub fn retina_edges<const N: usize>(
     let depth = |x: &Vector<N>| match cam.projection {
         Projection::Perspective => crate::linalg::norm(&sub(x, &cam.position)),
         Projection::Orthographic => camera_coords(cam, x)[N - 1],
+    };
+    let directions = directions(scene, angle_degrees)?;
+    let color_of = |d: &Vector<N>| {
+        direction_key(d)
+            .and_then(|(key, _)| directions.iter().find(|(k, _)| *k == key))
+            .map_or([1.0; 3], |(_, e)| e.color.map(|c| c as f32))
     };
     let mut out = Vec::new();
     for seg in edge_segments(scene, angle_degrees)? {
@@ -140,6 +251,7 @@ pub fn retina_edges<const N: usize>(
             b: [0.0; MAX_RETINA_DIM],
             depth: [depth(&a), depth(&b)],
             visible: seg.visible,
+            color: color_of(&sub(&seg.b, &seg.a)),
         };
         for k in 0..N - 1 {
             e.a[N - 2 - k] = xa[k];

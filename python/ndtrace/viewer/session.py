@@ -27,7 +27,7 @@ import numpy as np
 
 from .._ndtrace import check_picture_memory
 from .._util import check_memory
-from ..composite import composite, scene_options
+from ..composite import composite, picture_size, scene_options
 from ..display import camera_resolution, reduced_resolution
 from ..files import to_srgb8
 from ..retina import Retina, trace
@@ -55,7 +55,7 @@ DRAFT_STEP: float = 1.0
 BASE_KEYWORDS = frozenset({
     "retina", "mode", "azimuth", "elevation", "distance", "projection", "size", "opacity",
     "depth_cue", "axis", "background", "zoom", "step", "stages", "strip_height", "labels",
-    "threads",
+    "threads", "axes_frame",
 })
 
 _ZOOM_RANGE = (0.05, 50.0)
@@ -148,8 +148,10 @@ def display_aids() -> list[dict]:
     sections, cutaways and other display aids of this ndtrace, found by inspecting the
     function's signature): one dict per keyword with its ``name``, ``kind`` (``"bool"``,
     ``"number"``, ``"choice"`` with ``choices`` from the module's tuple named after the keyword,
-    e.g. ``LAYOUTS`` for ``layout``, or ``"text"``: a TOML value, empty for the default),
-    ``default`` and ``hint`` (the annotation)."""
+    e.g. ``LAYOUTS`` for ``layout`` — strings, or strings and booleans as ``LEGEND`` = ("auto",
+    True, False) —, ``"string"`` for a keyword of ``str | None`` (plain text, empty for None)
+    or ``"text"``: a TOML value, empty for the default), ``default`` and ``hint`` (the
+    annotation)."""
     out = []
     for name, p in _parameters().items():
         if name in BASE_KEYWORDS or p.kind not in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD):
@@ -162,11 +164,13 @@ def display_aids() -> list[dict]:
         elif isinstance(default, (int, float)):
             aid["kind"] = "number"
         elif isinstance(default, str):
-            # The choices: a tuple of strings in the module named after the keyword
-            # (``layout`` → ``LAYOUTS``), as ``mode`` has ``MODES``.
+            # The choices: a tuple of strings (or strings and booleans) in the module named
+            # after the keyword (``layout`` → ``LAYOUTS``), as ``mode`` has ``MODES``.
             named = [getattr(_composite_module, k, None) for k in (name.upper() + "S", name.upper() + "ES", name.upper())]
-            choices = [c for c in named if isinstance(c, tuple) and default in c and all(isinstance(v, str) for v in c)]
+            choices = [c for c in named if isinstance(c, tuple) and default in c and all(isinstance(v, (str, bool)) for v in c)]
             aid.update(kind="choice", choices=list(choices[0])) if choices else aid.update(kind="text")
+        elif default is None and str(hint).replace(" ", "") in ("str|None", "Optional[str]"):
+            aid["kind"] = "string"
         else:
             aid["kind"] = "text"
             aid["default"] = _jsonable(default)
@@ -264,7 +268,8 @@ class ViewSession:
         self.threads = threads
         initial = scene_options(desc)
         initial.pop("turntable", None)  # a view is one picture
-        picture = size or initial.get("size") or (512, 512)
+        shape = list(reversed(self.resolution))
+        picture = size or initial.get("size") or picture_size(shape, initial)
         self.size = (int(picture[0]), int(picture[1]))
         initial["size"] = list(self.size)
         # The full frame's picture, checked by the memory guard before the server starts.
@@ -520,6 +525,8 @@ class ViewSession:
             raise Superseded
         t2 = time.perf_counter()
         options = dict(snap.options)
+        if "axes_frame" in _parameters() and self.dim >= 3:  # the glyph turns with the object
+            options["axes_frame"] = snap.rotation.tolist()
         if snap.slice is not None:
             options = slice_options(options, retina.dim)
         if quality == DRAFT:
@@ -557,6 +564,8 @@ class ViewSession:
         of this ndtrace accepts, probed with the loader; the others). The picture's background
         is left to the scene's own ``background``."""
         table = {k: v for k, v in self.options.items() if k != "background" or v != self._desc.get("background")}
+        if "axes_frame" in _parameters() and self.dim >= 3 and not np.array_equal(self.rotation, np.eye(self.dim)):
+            table["axes_frame"] = self.rotation.tolist()  # the glyph as the page shows it
         accepted, refused = {}, {}
         probe = {"dim": self.dim, "camera": self._desc["camera"]}
         for key, value in table.items():

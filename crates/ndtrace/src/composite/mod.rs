@@ -43,6 +43,7 @@
 //! picture is bit-identical whatever the number of threads.
 
 mod aids;
+pub mod annotate;
 mod cubes;
 pub mod illustrative;
 mod montage;
@@ -56,11 +57,13 @@ mod view;
 mod volume;
 
 pub use aids::{Cubes, Cutaway, ViewLayout};
+pub use annotate::{axis_arrows, picture_layout, AxisArrow, Panel, PictureLayout, Rect};
 pub use illustrative::RetinaCamera;
 pub use montage::{slice_layout, Layout, SEPARATOR};
 pub use options::{
-    CompositeMode, CompositeOptions, Detail, GivenKeys, HiddenEdges, OptionError, DEFAULT_DISTANCE,
-    DEFAULT_SAMPLES, MAX_PIXELS, MAX_SAMPLES, MAX_TURNTABLE_FRAMES,
+    CompositeMode, CompositeOptions, Detail, EdgeColorBy, GivenKeys, HiddenEdges, OptionError,
+    Toggle, DEFAULT_DISTANCE, DEFAULT_SAMPLES, MAX_PIXELS, MAX_SAMPLES, MAX_TITLE_CHARS,
+    MAX_TURNTABLE_FRAMES,
 };
 pub use overlay::{PixelEdge, RetinaEdge, MAX_RETINA_DIM};
 pub use probe::{
@@ -125,6 +128,9 @@ pub struct RetinaExtras<'a> {
     pub object: Option<&'a [i32]>,
     /// The scene the retina was traced from, for pictures drawn at their own resolution.
     pub scene: Option<&'a dyn SceneProbe>,
+    /// Rows of the legend the picture makes room for at its bottom (0: none; see
+    /// [`annotate::picture_layout`]): whoever draws the legend knows what it holds.
+    pub legend_rows: usize,
 }
 
 impl std::fmt::Debug for RetinaExtras<'_> {
@@ -135,6 +141,7 @@ impl std::fmt::Debug for RetinaExtras<'_> {
             .field("edges", &self.edges.len())
             .field("object", &self.object.map(|o| o.len()))
             .field("scene", &self.scene.is_some())
+            .field("legend_rows", &self.legend_rows)
             .finish()
     }
 }
@@ -163,15 +170,25 @@ pub fn composite_retina(
     opts.validate_for(shape, depth.is_some())?;
     check_memory(shape, opts, 0)?;
     let m = shape.len();
-    let (w, h) = opts.size;
+    let layout = picture_layout(opts, shape, extras.legend_rows, None);
+    let (w, h) = layout.size;
+    check_size(w, h)?;
     let bg = opts.background.map(|x| x as f32);
     if m >= 3 && opts.mode != CompositeMode::Slices {
         return Ok(Image {
             width: w,
             height: h,
-            rgba: View3::new(rgba, depth, shape, extras, cells, opts).picture(opts),
+            rgba: View3::new(rgba, depth, shape, extras, cells, opts).picture(opts, &layout),
         });
     }
+    // A montage, a 2D retina or a strip: drawn in the one panel.
+    let panel = layout.panels[0].rect;
+    let inner = CompositeOptions {
+        size: (panel.w.max(1), panel.h.max(1)),
+        ..opts.clone()
+    };
+    let opts = &inner;
+    let (pw, ph) = opts.size;
     let mut vol = Volume {
         shape: shape.to_vec(),
         cells: prepare(rgba, depth, cells, opts),
@@ -188,7 +205,7 @@ pub fn composite_retina(
         );
         stage += 1;
     }
-    let rgba = match vol.shape.len() {
+    let tile = match vol.shape.len() {
         3 => render_slices(&vol, opts, bg),
         2 => {
             let (rows, cols) = (vol.shape[0], vol.shape[1]);
@@ -200,15 +217,39 @@ pub fn composite_retina(
                 gap: 0,
                 labels: false,
             };
-            render_tiles(w, h, &tiles, bg, |_, x, y| y * cols + x)
+            render_tiles(pw, ph, &tiles, bg, |_, x, y| y * cols + x)
         }
-        _ => render_strip(&vol.cells, w, h, opts.strip_height, bg),
+        _ => render_strip(&vol.cells, pw, ph, opts.strip_height, bg),
+    };
+    let rgba = if (pw, ph) == (w, h) {
+        tile
+    } else {
+        let mut img = [bg[0], bg[1], bg[2], 0.0].repeat(w * h);
+        if panel.w > 0 && panel.h > 0 {
+            for y in 0..panel.h {
+                let row = ((panel.y + y) * w + panel.x) * 4;
+                img[row..row + panel.w * 4].copy_from_slice(&tile[y * pw * 4..][..panel.w * 4]);
+            }
+        }
+        img
     };
     Ok(Image {
         width: w,
         height: h,
         rgba,
     })
+}
+
+/// Refuses a picture (of a layout's default size) of more than [`MAX_PIXELS`].
+fn check_size(w: usize, h: usize) -> NdResult<()> {
+    if w.checked_mul(h).is_none_or(|p| p > MAX_PIXELS) {
+        return Err(OptionError {
+            key: "size".into(),
+            message: format!("({w}, {h}) exceeds {MAX_PIXELS} pixels"),
+        }
+        .into());
+    }
+    Ok(())
 }
 
 /// A turntable: `frames` pictures of the retina seen by a compositing camera orbiting it, frame
@@ -249,7 +290,6 @@ pub fn composite_turntable_each(
     check_extras(extras, cells, shape.len())?;
     opts.validate_for(shape, depth.is_some())?;
     check_memory(shape, opts, 0)?;
-    let (w, h) = opts.size;
     if shape.len() < 3 || opts.mode == CompositeMode::Slices {
         let one = composite_retina(rgba, depth, shape, extras, opts)?;
         for k in 0..frames {
@@ -257,6 +297,9 @@ pub fn composite_turntable_each(
         }
         return Ok(());
     }
+    let layout = picture_layout(opts, shape, extras.legend_rows, None);
+    let (w, h) = layout.size;
+    check_size(w, h)?;
     let view = View3::new(rgba, depth, shape, extras, cells, opts);
     for k in 0..frames {
         let o = CompositeOptions {
@@ -268,7 +311,7 @@ pub fn composite_turntable_each(
             Image {
                 width: w,
                 height: h,
-                rgba: view.picture(&o),
+                rgba: view.picture(&o, &layout),
             },
         );
     }
@@ -320,7 +363,7 @@ pub fn check_memory(shape: &[usize], opts: &CompositeOptions, frames: usize) -> 
 }
 
 /// The feature-edge pieces the illustrative picture of `opts` draws (one view, whatever
-/// `layout`), in picture pixels (x right, y down) with their N-D depths and visibility: what a
+/// `layout`, in the panel [`picture_layout`] gives it), in picture pixels (x right, y down) with their N-D depths and visibility: what a
 /// vector drawing of the picture's edges needs (`ndtrace.write_svg`). Empty unless the retina
 /// comes with edges and `opts.edges`.
 pub fn picture_edges(
@@ -338,9 +381,11 @@ pub fn picture_edges(
     }
     let o = CompositeOptions {
         mode: CompositeMode::Illustrative,
+        layout: ViewLayout::Single,
         ..opts.clone()
     };
-    Ok(View3::new(rgba, depth, shape, extras, cells, &o).pixel_edges(&o))
+    let layout = picture_layout(&o, shape, extras.legend_rows, None);
+    Ok(View3::new(rgba, depth, shape, extras, cells, &o).pixel_edges(&o, &layout))
 }
 
 fn check_extras(extras: &RetinaExtras<'_>, cells: usize, m: usize) -> NdResult<()> {

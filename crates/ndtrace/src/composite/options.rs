@@ -91,6 +91,79 @@ pub enum Detail {
     Retina,
 }
 
+/// A picture aid that is shown when it helps (`"auto"`) or forced on (`true`) or off
+/// (`false`): a table writes it as `"auto"`, `true` or `false`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Toggle {
+    /// Shown when it says something (see the option).
+    #[default]
+    Auto,
+    /// Always shown.
+    On,
+    /// Never shown.
+    Off,
+}
+
+impl Toggle {
+    /// Whether the aid is shown, `auto` standing for `when_auto`.
+    pub fn resolve(self, when_auto: bool) -> bool {
+        match self {
+            Toggle::Auto => when_auto,
+            Toggle::On => true,
+            Toggle::Off => false,
+        }
+    }
+}
+
+impl Serialize for Toggle {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Toggle::Auto => serializer.serialize_str("auto"),
+            Toggle::On => serializer.serialize_bool(true),
+            Toggle::Off => serializer.serialize_bool(false),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Toggle {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = Toggle;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("\"auto\", true or false")
+            }
+            fn visit_bool<E: de::Error>(self, v: bool) -> Result<Toggle, E> {
+                Ok(if v { Toggle::On } else { Toggle::Off })
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<Toggle, E> {
+                match v {
+                    "auto" => Ok(Toggle::Auto),
+                    _ => Err(E::custom(format!(
+                        "expected \"auto\", true or false, got \"{v}\""
+                    ))),
+                }
+            }
+        }
+        deserializer.deserialize_any(V)
+    }
+}
+
+/// What colours the feature edges of the illustrative mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EdgeColorBy {
+    /// Parallel edges share a colour of the object's `material.palette` (the tesseract's 32
+    /// edges in 4 colours, one per axis direction).
+    Direction,
+    /// The course's depth cueing (the default): edges thicker and stronger near the N-D eye,
+    /// thinner and fainter far from it, over the depth range of the edges drawn.
+    #[default]
+    Depth,
+    /// One colour and width ([`CompositeOptions::edge_color`]).
+    None,
+}
+
 /// Default camera distance, in half-diagonals of the retina cube.
 pub const DEFAULT_DISTANCE: f64 = 4.0;
 /// Largest number of pixels of a picture.
@@ -101,6 +174,8 @@ pub const MAX_SAMPLES: usize = 256;
 pub const DEFAULT_SAMPLES: usize = 16;
 /// Most frames of a turntable.
 pub const MAX_TURNTABLE_FRAMES: usize = 3600;
+/// Most characters of a [`CompositeOptions::title`].
+pub const MAX_TITLE_CHARS: usize = 200;
 
 /// Declares [`CompositeOptions`] from one list of `field: Type = default` entries: the struct,
 /// its [`Default`], [`CompositeOptions::KEYS`] and its serde form (a table with one optional
@@ -297,6 +372,27 @@ composite_options! {
         /// azimuth + 360°·k/frames, the retina traced once; `ndtrace.composite` then returns
         /// the frames and `-o orbit.gif` animates them. 0 (the default): one picture.
         turntable: usize = 0,
+        /// A colour bar (and keys) along the bottom of the picture: the colormap's ramp with
+        /// its name, range, ticks and isoline levels; for `material.color_by` and
+        /// [`edge_color_by`](Self::edge_color_by) `"direction"` a key of the colours used.
+        /// `"auto"` (the default) shows it when an object has a colormap, a `color_by` or a
+        /// `label`, or the edges are coloured by direction; `true`/`false` force it. The core
+        /// reserves the strip ([`annotate`](super::annotate)); `ndtrace.composite` draws it.
+        legend: Toggle = Toggle::Auto,
+        /// The N-D axes glyph in the lower-left corner of the view: the N world axes (or the
+        /// columns of [`axes_frame`](Self::axes_frame)) as arrows through the N-D camera, the
+        /// stages and the compositing camera, each shortened and dimmed by how far it points
+        /// away from the N-D eye. `"auto"` (the default) shows it for N ≥ 4.
+        axes: Toggle = Toggle::Auto,
+        /// The frame whose axes the glyph shows: N rows of N numbers, its columns the axes in
+        /// world coordinates (the viewer sets its rotation here, so the glyph turns with the
+        /// drag). Default none: the world axes.
+        axes_frame: Option<Vec<Vec<f64>>> = None,
+        /// A caption line above the picture. Default none.
+        title: Option<String> = None,
+        /// How the feature edges are coloured: `"depth"` (the default: the course's depth
+        /// cueing), `"direction"` (parallel edges share a palette colour) or `"none"`.
+        edge_color_by: EdgeColorBy = EdgeColorBy::Depth,
         /// For N ≥ 4: a region of the 3D volume removed so its inside shows: a table with
         /// `shape = "half_space"` (`normal`, `offset`), `"sphere"` (`center`, `radius`) or
         /// `"box"` (`min`, `max`), in world coordinates (see [`Cutaway`]). Default none.
@@ -321,15 +417,15 @@ composite_options! {
 
 /// Which keys of [`CompositeOptions::KEYS`] a table gave (see [`CompositeOptions::given`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct GivenKeys(u32);
+pub struct GivenKeys(u64);
 
 impl GivenKeys {
     /// No key: options built in code.
     pub const NONE: GivenKeys = GivenKeys(0);
     /// Every key (serializing then writes every field, e.g. to list the defaults).
-    pub const ALL: GivenKeys = GivenKeys(u32::MAX >> (32 - CompositeOptions::KEYS.len()));
+    pub const ALL: GivenKeys = GivenKeys(u64::MAX >> (64 - CompositeOptions::KEYS.len()));
 
-    fn bit(key: &str) -> u32 {
+    fn bit(key: &str) -> u64 {
         CompositeOptions::KEYS
             .iter()
             .position(|k| *k == key)
@@ -469,6 +565,11 @@ impl CompositeOptions {
             stereo_angle,
             cutaway,
             turntable,
+            legend: _,
+            axes: _,
+            axes_frame,
+            title,
+            edge_color_by: _,
             cubes,
             given: _,
         } = self;
@@ -478,6 +579,21 @@ impl CompositeOptions {
                     "cubes.size",
                     format!("must be in (0, 1] (a fraction of a cell), got {}", c.size),
                 ));
+            }
+        }
+        if let Some(t) = title {
+            if t.chars().count() > MAX_TITLE_CHARS || t.contains(['\n', '\r']) {
+                return Err(bad(
+                    "title",
+                    format!("must be one line of at most {MAX_TITLE_CHARS} characters"),
+                ));
+            }
+        }
+        if let Some(f) = axes_frame {
+            for (i, row) in f.iter().enumerate() {
+                for (j, &v) in row.iter().enumerate() {
+                    finite(&format!("axes_frame[{i}][{j}]"), v)?;
+                }
             }
         }
         for (k, &v) in section.iter().enumerate() {
@@ -610,6 +726,15 @@ impl CompositeOptions {
                     self.axis
                 ),
             ));
+        }
+        if let Some(f) = &self.axes_frame {
+            let n = m + 1;
+            if f.len() != n || f.iter().any(|row| row.len() != n) {
+                return Err(bad(
+                    "axes_frame",
+                    format!("expected {n} rows of {n} numbers (an N×N matrix for N = {n})"),
+                ));
+            }
         }
         if self.cubes.is_some() && m < 3 {
             return Err(bad(

@@ -4,7 +4,7 @@
 //! x_j·f/(d + x_k) and the compositing camera — so they lie exactly on the cells they bound.
 //! Perspective maps send lines to lines, so each piece's two ends suffice.
 
-use super::options::{CompositeOptions, HiddenEdges};
+use super::options::{CompositeOptions, EdgeColorBy, HiddenEdges};
 use super::{FAR_TINT, NEAR_TINT};
 use rayon::prelude::*;
 
@@ -24,6 +24,9 @@ pub struct RetinaEdge {
     pub depth: [f64; 2],
     /// Seen by the N-D camera (else hidden in N-D).
     pub visible: bool,
+    /// The colour of the edge's direction (linear RGB; used with
+    /// [`EdgeColorBy::Direction`], see [`crate::edges::edge_directions`]).
+    pub color: [f32; 3],
 }
 
 /// A piece projected to the picture: pixel coordinates (x right, y down; pixel (i, j) spans
@@ -38,7 +41,17 @@ pub struct PixelEdge {
     pub depth: [f64; 2],
     /// Seen by the N-D camera.
     pub visible: bool,
+    /// The colour of its direction (see [`RetinaEdge::color`]).
+    pub color: [f32; 3],
 }
+
+/// Width of the nearest edges over [`edge_width`] with [`EdgeColorBy::Depth`] and
+/// [`EdgeColorBy::Direction`]; the farthest are [`FAR_WIDTH`] of it.
+pub const NEAR_WIDTH: f64 = 1.5;
+/// Width of the farthest edges over [`edge_width`].
+pub const FAR_WIDTH: f64 = 0.55;
+/// Strength (opacity) of the farthest edges with [`EdgeColorBy::Depth`]; the nearest have 1.
+pub const FAR_STRENGTH: f32 = 0.4;
 
 /// The line width in pixels: the option, or for 0 a width that reads at the picture's size.
 pub fn edge_width(o: &CompositeOptions) -> f64 {
@@ -59,11 +72,15 @@ pub fn edge_color(o: &CompositeOptions) -> [f32; 3] {
     }
 }
 
-/// The colour of edges at an N-D depth: [`edge_color`], with `depth_cue` > 0 tinted from warm
-/// (nearest) to cool (farthest) over the depth range of the edges drawn.
+/// How an edge looks at an N-D depth: [`edge_color`] (with `depth_cue` > 0 tinted from warm,
+/// nearest, to cool, farthest) or its direction's colour, and with
+/// [`EdgeColorBy::Depth`] or [`EdgeColorBy::Direction`] its width and strength by depth (the
+/// course's depth cueing: thicker and stronger near the N-D eye), over the depth range of the
+/// edges drawn.
 pub struct EdgeColors {
     base: [f32; 3],
     cue: f32,
+    by: EdgeColorBy,
     lo: f64,
     span: f64,
 }
@@ -82,21 +99,45 @@ impl EdgeColors {
         EdgeColors {
             base: edge_color(o),
             cue: o.depth_cue as f32,
+            by: o.edge_color_by,
             lo,
             span: if hi > lo { hi - lo } else { 1.0 },
         }
     }
 
-    /// The linear RGB at depth `d`.
-    pub fn at(&self, d: f64) -> [f32; 3] {
+    /// Depth `d` on [0, 1] over the edges' range (nearest 0).
+    fn t(&self, d: f64) -> f64 {
+        ((d - self.lo) / self.span).clamp(0.0, 1.0)
+    }
+
+    /// The linear RGB of edge `e` at depth `d`.
+    pub fn at(&self, e: &PixelEdge, d: f64) -> [f32; 3] {
+        if self.by == EdgeColorBy::Direction {
+            return e.color;
+        }
         if self.cue > 0.0 {
-            let t = ((d - self.lo) / self.span).clamp(0.0, 1.0) as f32;
+            let t = self.t(d) as f32;
             std::array::from_fn(|k| {
                 let tint = NEAR_TINT[k] + (FAR_TINT[k] - NEAR_TINT[k]) * t;
                 (self.base[k] * (1.0 - self.cue + self.cue * tint)).min(1.0)
             })
         } else {
             self.base
+        }
+    }
+
+    /// The width (times [`edge_width`]) and strength (opacity) of an edge at depth `d`.
+    pub fn weight(&self, d: f64) -> (f64, f32) {
+        match self.by {
+            EdgeColorBy::None => (1.0, 1.0),
+            by => {
+                let t = self.t(d);
+                let strength = match by {
+                    EdgeColorBy::Depth => 1.0 - (1.0 - FAR_STRENGTH) * t as f32,
+                    _ => 1.0,
+                };
+                (NEAR_WIDTH + (FAR_WIDTH - NEAR_WIDTH) * t, strength)
+            }
         }
     }
 }
@@ -121,8 +162,8 @@ fn distance(q: [f64; 2], p0: [f64; 2], p1: [f64; 2]) -> (f64, f64) {
 ///
 /// Visible pieces are solid lines of [`edge_width`]; hidden pieces follow
 /// [`CompositeOptions::hidden_edges`]: dashed (8 px period) at 60 % strength and 0.6× width,
-/// faint (solid at 30 %), or not drawn. With `depth_cue > 0` the colour is tinted by N-D depth
-/// from warm (near) to cool (far), normalized over the edges' depth range. Each pixel takes
+/// faint (solid at 30 %), or not drawn. Colour, width and strength by N-D depth or direction
+/// are [`EdgeColors`]'. Each pixel takes
 /// the strongest visible and the strongest hidden coverage (so crossings and shared vertices
 /// are not darker), hidden under visible: the result does not depend on the edges' order or
 /// the number of threads.
@@ -150,7 +191,9 @@ pub(super) fn draw(
                 (false, HiddenEdges::Faint) => (0.3, 0.6 * width, false),
                 (false, HiddenEdges::None) => continue,
             };
-            let r = lw / 2.0 + 1.0;
+            // The widest the piece gets (by depth), for the rows and columns it may cover.
+            let widest = colors.weight(e.depth[0]).0.max(colors.weight(e.depth[1]).0);
+            let r = lw * widest / 2.0 + 1.0;
             let (ymin, ymax) = (e.p[0][1].min(e.p[1][1]) - r, e.p[0][1].max(e.p[1][1]) + r);
             if y < ymin || y > ymax {
                 continue;
@@ -160,7 +203,9 @@ pub(super) fn draw(
             let len = ((e.p[1][0] - e.p[0][0]).powi(2) + (e.p[1][1] - e.p[0][1]).powi(2)).sqrt();
             for (px, layer) in layers.iter_mut().enumerate().take(xmax).skip(xmin) {
                 let (dist, t) = distance([px as f64 + 0.5, y], e.p[0], e.p[1]);
-                let mut cov = (lw / 2.0 + 0.5 - dist).clamp(0.0, 1.0) as f32;
+                let d = e.depth[0] + t * (e.depth[1] - e.depth[0]);
+                let (scale, weight) = colors.weight(d);
+                let mut cov = (lw * scale / 2.0 + 0.5 - dist).clamp(0.0, 1.0) as f32 * weight;
                 if cov <= 0.0 {
                     continue;
                 }
@@ -177,7 +222,7 @@ pub(super) fn draw(
                 let cov = cov * strength;
                 let slot = &mut layer[usize::from(!e.visible)];
                 if cov > slot.0 {
-                    *slot = (cov, colors.at(e.depth[0] + t * (e.depth[1] - e.depth[0])));
+                    *slot = (cov, colors.at(e, d));
                 }
             }
         }

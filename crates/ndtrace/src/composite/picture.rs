@@ -31,8 +31,8 @@
 //! any number of threads.
 
 use super::aids::{world_of, Cutaway};
+use super::annotate::{hull_of_points, Hull};
 use super::illustrative::{dark, ink};
-use super::montage::slice_layout;
 use super::overlay::edge_width;
 use super::probe::{ObjectLook, Probe, SceneProbe, SheetKind, Structure};
 use super::sheets::{Crossing, ViewSheets};
@@ -250,6 +250,19 @@ impl<'a> Exact<'a> {
         Some((lo, hi))
     }
 
+    /// The [`Hull`] of the structure in the retina (its sheets' vertices, clipped to the
+    /// retina): what the compositing camera frames and centres with `fit`, the same at any
+    /// retina resolution; `None` when the structure is empty.
+    pub(super) fn hull(&self) -> Option<Hull> {
+        let n = self.n.map(|v| v as f64);
+        hull_of_points(self.s.sheets.iter().flat_map(|sh| {
+            sh.v.iter().map(|&v| {
+                let p = self.s.vertices[v as usize].p;
+                DVec3::from_array(std::array::from_fn(|k| p[k].clamp(0.0, n[k])))
+            })
+        }))
+    }
+
     /// The view of `cam` in `mode`: RGBA over the background and per pixel the distance along
     /// the view direction at which the opacity reached ½; `None` when the structure cannot be
     /// seen by this camera (then the caller draws from the cells).
@@ -395,7 +408,9 @@ impl<'a> Exact<'a> {
     /// Section `k` (0: across z, 1: across x, 2: across y, as [`super::ViewLayout::Sections`])
     /// through the world point `at`, `w` × `h` pixels over `bg`: each pixel the colour of the
     /// 4D ray through its point of the section plane, the plane scaled to fit (aspect kept,
-    /// centred); pixels that differ from a neighbour get the anti-aliasing's rays.
+    /// centred) — with `fit`, only the part of it over the structure's box and a margin of a
+    /// 32nd of the retina, so each section frames the object at any retina resolution; pixels
+    /// that differ from a neighbour get the anti-aliasing's rays.
     pub(super) fn section(
         &self,
         at: [f64; 3],
@@ -418,17 +433,34 @@ impl<'a> Exact<'a> {
             cell(at[1], 1, true),
             cell(at[2], 2, false),
         );
-        let (tw, th) = match k {
-            0 => (n[0], n[1]),
-            1 => (n[2], n[1]),
-            _ => (n[0], n[2]),
+        // The part of the plane shown (cell coordinates): the structure's box with a margin,
+        // or the whole retina.
+        let full = ([0.0; 3], n.map(|v| v as f64));
+        let (lo, hi) = match self.frame().filter(|_| o.fit) {
+            Some((lo, hi)) => {
+                let m = *n.iter().max().unwrap() as f64 / 32.0;
+                (
+                    std::array::from_fn(|a| (lo[a] - m).max(0.0)),
+                    std::array::from_fn(|a| (hi[a] + m).min(full.1[a])),
+                )
+            }
+            None => full,
         };
-        let lay = slice_layout(w, h, 1, tw, th, 0);
-        let (ox, oy) = (lay.origin.0 as f64, lay.origin.1 as f64);
-        let (sx, sy) = (lay.tile_w as f64 / tw as f64, lay.tile_h as f64 / th as f64);
+        let (ua, va) = match k {
+            0 => (0, 1),
+            1 => (2, 1),
+            _ => (0, 2),
+        };
+        let (tw, th) = (hi[ua] - lo[ua], hi[va] - lo[va]);
+        let scale = (w as f64 / tw).min(h as f64 / th);
+        let (ox, oy) = (
+            (w as f64 - tw * scale) / 2.0 - lo[ua] * scale,
+            (h as f64 - th * scale) / 2.0 - lo[va] * scale,
+        );
+        let (sx, sy) = (scale, scale);
         let point = move |x: f64, y: f64| -> Option<[f64; 3]> {
             let (u, v) = ((x - ox) / sx, (y - oy) / sy);
-            if !(u >= 0.0 && v >= 0.0 && u <= tw as f64 && v <= th as f64) {
+            if !(u >= lo[ua] && v >= lo[va] && u <= hi[ua] && v <= hi[va]) {
                 return None;
             }
             Some(match k {

@@ -1019,7 +1019,9 @@ fn pictures_traced_on_a_lattice_are_the_pictures_traced_at_every_pixel_within_a_
             cells: prepare(cells, None, shape.iter().product(), &o),
         };
         let grid = Grid::new(&vol);
-        let cam = volume::Camera3::new([shape[2], shape[1], shape[0]], grid.occupied_box(), &o);
+        // The views frame the occupied part's hull (`fit`): its box sets the pixel size.
+        let framed = super::annotate::hull(&shape, &vol.cells).map(|h| h.frame);
+        let cam = volume::Camera3::new([shape[2], shape[1], shape[0]], framed, &o);
         // The spacing over the stored part of the prepared volume (what the volume and
         // first-hit views render), and the least spacing any grid of this volume can have
         // (the illustrative view renders a classified grid of its own, stored in a box of

@@ -3,6 +3,7 @@
 //! layout, the frames of a turntable — with the feature edges drawn over each view.
 
 use super::aids::{cut, world_of, Cutaway, ViewLayout};
+use super::annotate::{hull, PictureLayout, Rect};
 use super::illustrative::{self, Cues3};
 use super::montage::{render_tiles, Tiles};
 use super::overlay::{self, PixelEdge, RetinaEdge};
@@ -28,6 +29,7 @@ struct Edge3 {
     b: DVec3,
     depth: [f64; 2],
     visible: bool,
+    color: [f32; 3],
 }
 
 /// A retina of m ≥ 3 axes made ready for 3D views.
@@ -38,10 +40,16 @@ pub(super) struct View3<'a> {
     source: Source,
     /// Cells of the 3D volume (column, row, slice).
     n: [usize; 3],
-    /// The box of the occupied cells, when `fit`.
+    /// The box the camera frames, when `fit`: about the occupied cells' centre, with the
+    /// radius of their [`hull`](super::annotate::Hull) as its half-diagonal.
     frame: Option<([f64; 3], [f64; 3])>,
+    /// When `fit`, the corners of the occupied part the views centre in their panels.
+    hull: Vec<DVec3>,
     /// For the sections layout: the premultiplied 3D volume (before any cutaway).
     sections: Option<Volume>,
+    /// With `fit`, the cells (column, row, slice; lower and upper bounds) the sections show:
+    /// the box of the occupied ones and a cell around, so each section frames the object.
+    section_box: Option<([usize; 3], [usize; 3])>,
     edges: Vec<Edge3>,
     /// The mode the views are marched in.
     mode: CompositeMode,
@@ -96,6 +104,7 @@ impl<'a> View3<'a> {
         // The framing box: the occupied cells before any cutaway, so a cut does not move the
         // object in the picture.
         let mut frame = None;
+        let mut occupied = None;
         let source = if illustrative {
             // The cells' colours with the depth cue (coverage unscaled: `opacity` scales the
             // interior).
@@ -106,6 +115,7 @@ impl<'a> View3<'a> {
             let mut prepared = prepare(rgba, depth, cells, &unit);
             if shape.len() == 3 {
                 frame = box_of(shape, &prepared);
+                occupied = opts.fit.then(|| hull(shape, &prepared)).flatten();
                 if let Some(c) = &opts.cutaway {
                     cut(&mut prepared, shape, c);
                 }
@@ -174,6 +184,7 @@ impl<'a> View3<'a> {
                     cells: coverage,
                 });
                 frame = box_of(&vol.shape, &vol.cells);
+                occupied = opts.fit.then(|| hull(&vol.shape, &vol.cells)).flatten();
                 if let Some(c) = &opts.cutaway {
                     cut(&mut vol.cells, &vol.shape, c);
                     cut(&mut coverage.cells, &coverage.shape, c);
@@ -183,12 +194,31 @@ impl<'a> View3<'a> {
         } else {
             let mut vol = plain();
             frame = box_of(&vol.shape, &vol.cells);
+            occupied = opts.fit.then(|| hull(&vol.shape, &vol.cells)).flatten();
             if let Some(c) = &opts.cutaway {
                 cut(&mut vol.cells, &vol.shape, c);
             }
             Source::Grid(Grid::new(&vol))
         };
-        let frame = if opts.fit { frame } else { None };
+        let section_box = (sections.as_ref())
+            .filter(|_| opts.fit)
+            .and_then(|v| box_of(&v.shape, &v.cells))
+            .map(|(lo, hi)| {
+                let full = [
+                    v_dims(&sections, 2),
+                    v_dims(&sections, 1),
+                    v_dims(&sections, 0),
+                ];
+                (
+                    lo.map(|x| (x as usize).saturating_sub(1)),
+                    std::array::from_fn(|k| (hi[k] as usize + 1).min(full[k])),
+                )
+            });
+        let (frame, hull) = match (opts.fit, occupied) {
+            (true, Some(h)) => (Some(h.frame), h.points),
+            (true, None) => (frame, Vec::new()),
+            (false, _) => (None, Vec::new()),
+        };
         let edges = if illustrative && opts.edges {
             edges_3d(extras.edges, shape, n, opts)
         } else {
@@ -199,7 +229,9 @@ impl<'a> View3<'a> {
             source,
             n,
             frame,
+            hull,
             sections,
+            section_box,
             edges,
             mode: if illustrative {
                 CompositeMode::Volume
@@ -210,7 +242,7 @@ impl<'a> View3<'a> {
     }
 
     /// The views of a 3D retina drawn from its scene ([`Exact`]): the structure and the cells'
-    /// colours, framed by the structure's box (the same at any retina resolution).
+    /// colours, framed by the structure's hull (the same at any retina resolution).
     fn exact(
         probe: &'a dyn super::probe::SceneProbe,
         rgba: &[f32],
@@ -227,7 +259,10 @@ impl<'a> View3<'a> {
         let prepared = prepare(rgba, depth, cells, &unit);
         let exact = Exact::new(probe, &prepared, shape, depth, extras.object, opts);
         let n = [shape[2], shape[1], shape[0]];
-        let frame = if opts.fit { exact.frame() } else { None };
+        let (frame, hull) = match exact.hull().filter(|_| opts.fit) {
+            Some(h) => (Some(h.frame), h.points),
+            None => (None, Vec::new()),
+        };
         let illustrative = opts.mode == CompositeMode::Illustrative;
         let edges = if illustrative && opts.edges {
             edges_3d(extras.edges, shape, n, opts)
@@ -245,73 +280,101 @@ impl<'a> View3<'a> {
             source,
             n,
             frame,
+            hull,
             sections: None,
+            section_box: None,
             edges,
             mode: opts.mode,
         }
     }
 
-    /// The picture of `opts` (its size, azimuth and layout).
-    pub(super) fn picture(&self, opts: &CompositeOptions) -> Vec<f32> {
-        let (w, h) = opts.size;
+    /// The picture of `opts` (its azimuth and layout) with the panels of `layout`.
+    pub(super) fn picture(&self, opts: &CompositeOptions, layout: &PictureLayout) -> Vec<f32> {
+        let (w, h) = layout.size;
         let bg = opts.background.map(|x| x as f32);
-        let sized = |w: usize, h: usize, azimuth: f64| CompositeOptions {
-            size: (w.max(1), h.max(1)),
+        let sized = |r: Rect, azimuth: f64| CompositeOptions {
+            size: (r.w.max(1), r.h.max(1)),
             azimuth,
             ..opts.clone()
         };
+        let first = layout.panels[0].rect;
+        if layout.panels.len() == 1 && (first.w, first.h) == (w, h) {
+            return self.view(&sized(first, opts.azimuth));
+        }
+        let mut img = [bg[0], bg[1], bg[2], 0.0].repeat(w * h);
+        let mut place = |r: Rect, tile: &[f32]| {
+            if r.w > 0 && r.h > 0 {
+                paste(&mut img, w, tile, r.w, r.x, r.y, r.w, r.h);
+            }
+        };
         match opts.layout {
-            ViewLayout::Single => self.view(opts),
+            ViewLayout::Single => place(first, &self.view(&sized(first, opts.azimuth))),
             ViewLayout::Stereo => {
-                let (wl, wr) = (w / 2, w - w / 2);
                 let half = opts.stereo_angle / 2.0;
-                let left = self.view(&sized(wl, h, opts.azimuth - half));
-                let right = self.view(&sized(wr, h, opts.azimuth + half));
-                let mut img = vec![0f32; w * h * 4];
-                paste(&mut img, w, &left, wl.max(1), 0, 0, wl, h);
-                paste(&mut img, w, &right, wr, wl, 0, wr, h);
-                img
-            }
-            ViewLayout::Slice => {
-                let wl = w / 2;
-                let left = self.view(&sized(wl, h, opts.azimuth));
-                let mut img = vec![0f32; w * h * 4];
-                paste(&mut img, w, &left, wl.max(1), 0, 0, wl, h);
-                img
-            }
-            ViewLayout::Sections => {
-                let (wl, wr, ht, hb) = (w / 2, w - w / 2, h / 2, h - h / 2);
-                let mut img = vec![0f32; w * h * 4];
-                let view = self.view(&sized(wl, ht, opts.azimuth));
-                paste(&mut img, w, &view, wl.max(1), 0, 0, wl, ht);
-                for (k, (x0, y0, qw, qh)) in [(wl, 0, wr, ht), (0, ht, wl, hb), (wl, ht, wr, hb)]
-                    .into_iter()
-                    .enumerate()
-                {
-                    if qw == 0 || qh == 0 {
-                        continue;
-                    }
-                    let tile = match (&self.exact, &self.sections) {
-                        (Some(ex), _) => ex.section(opts.section, k, qw, qh, opts),
-                        (None, Some(vol)) => section(vol, opts.section, k, qw, qh, bg),
-                        (None, None) => unreachable!("a sections layout keeps its volume"),
-                    };
-                    paste(&mut img, w, &tile, qw, x0, y0, qw, qh);
+                for (panel, side) in layout.panels.iter().zip([-half, half]) {
+                    let r = panel.rect;
+                    place(r, &self.view(&sized(r, opts.azimuth + side)));
                 }
-                img
+            }
+            // The slice's half is drawn by whoever traces the slice.
+            ViewLayout::Slice => place(first, &self.view(&sized(first, opts.azimuth))),
+            ViewLayout::Sections => {
+                place(first, &self.view(&sized(first, opts.azimuth)));
+                for (k, panel) in layout.panels.iter().skip(1).enumerate() {
+                    let r = panel.rect;
+                    if r.w > 0 && r.h > 0 {
+                        let tile = match (&self.exact, &self.sections) {
+                            (Some(ex), _) => ex.section(opts.section, k, r.w, r.h, opts),
+                            (None, Some(vol)) => {
+                                section(vol, opts.section, k, (r.w, r.h), self.section_box, bg)
+                            }
+                            (None, None) => unreachable!("a sections layout keeps its volume"),
+                        };
+                        place(r, &tile);
+                    }
+                }
             }
         }
+        img
     }
 
-    /// The feature-edge pieces of the single view of `opts`, in its picture's pixels.
-    pub(super) fn pixel_edges(&self, opts: &CompositeOptions) -> Vec<PixelEdge> {
-        project(&self.edges, &Camera3::new(self.n, self.frame, opts))
+    /// The feature-edge pieces of the view of `opts` in the first panel of `layout`, in the
+    /// picture's pixels.
+    pub(super) fn pixel_edges(
+        &self,
+        opts: &CompositeOptions,
+        layout: &PictureLayout,
+    ) -> Vec<PixelEdge> {
+        let r = layout.panels[0].rect;
+        let o = CompositeOptions {
+            size: (r.w.max(1), r.h.max(1)),
+            ..opts.clone()
+        };
+        let mut pieces = project(&self.edges, &self.camera(&o));
+        for e in &mut pieces {
+            for p in &mut e.p {
+                p[0] += r.x as f64;
+                p[1] += r.y as f64;
+            }
+        }
+        pieces
+    }
+
+    /// The compositing camera of a view at `opts.size`: framing the occupied part's sphere and
+    /// centring its projection (with `fit`), or the whole volume.
+    fn camera(&self, opts: &CompositeOptions) -> Camera3 {
+        let cam = Camera3::new(self.n, self.frame, opts);
+        if self.hull.is_empty() {
+            cam
+        } else {
+            cam.centred_on(&self.hull)
+        }
     }
 
     /// One view at `opts.size`.
     fn view(&self, opts: &CompositeOptions) -> Vec<f32> {
         let bg = opts.background.map(|x| x as f32);
-        let cam = Camera3::new(self.n, self.frame, opts);
+        let cam = self.camera(opts);
         if let Some(ex) = &self.exact {
             if let Some((mut img, half, cover)) = ex.view(&cam, self.mode, opts) {
                 let mut pixels = project(&self.edges, &cam);
@@ -325,6 +388,7 @@ impl<'a> View3<'a> {
                             b,
                             depth,
                             visible: true,
+                            color: overlay::edge_color(opts),
                         })
                         .collect();
                     pixels.extend(project(&outline, &cam));
@@ -426,9 +490,22 @@ fn paste(
     }
 }
 
+/// Axis `k` (numpy order) of the sections volume's shape.
+fn v_dims(v: &Option<Volume>, k: usize) -> usize {
+    v.as_ref().map_or(1, |v| v.shape[k])
+}
+
 /// Section `k` (0: across z, 1: across x, 2: across y; see [`ViewLayout::Sections`]) of the
-/// volume through the world point `at`, scaled to fit `w` × `h` over `bg`.
-fn section(vol: &Volume, at: [f64; 3], k: usize, w: usize, h: usize, bg: [f32; 3]) -> Vec<f32> {
+/// volume through the world point `at`, its cells within `within` (column, row, slice bounds;
+/// all of them when `None`), scaled to fit `w` × `h` over `bg`.
+fn section(
+    vol: &Volume,
+    at: [f64; 3],
+    k: usize,
+    (w, h): (usize, usize),
+    within: Option<([usize; 3], [usize; 3])>,
+    bg: [f32; 3],
+) -> Vec<f32> {
     let [nz, ny, nx] = [vol.shape[0], vol.shape[1], vol.shape[2]];
     let c = 2.0 / nx.max(ny).max(nz) as f64;
     let index = |v: f64, r: usize| ((v / c).floor().max(0.0) as usize).min(r - 1);
@@ -436,10 +513,12 @@ fn section(vol: &Volume, at: [f64; 3], k: usize, w: usize, h: usize, bg: [f32; 3
     let y0 = index(ny as f64 * c / 2.0 - at[1], ny);
     let z0 = index(at[2] + nz as f64 * c / 2.0, nz);
     let idx = move |x: usize, y: usize, z: usize| x + nx * (y + ny * z);
+    let (lo, hi) = within.unwrap_or(([0; 3], [nx, ny, nz]));
+    let span = |a: usize| hi[a].saturating_sub(lo[a]).max(1);
     let (tw, th) = match k {
-        0 => (nx, ny),
-        1 => (nz, ny),
-        _ => (nx, nz),
+        0 => (span(0), span(1)),
+        1 => (span(2), span(1)),
+        _ => (span(0), span(2)),
     };
     let tiles = Tiles {
         cells: &vol.cells,
@@ -449,10 +528,11 @@ fn section(vol: &Volume, at: [f64; 3], k: usize, w: usize, h: usize, bg: [f32; 3
         gap: 0,
         labels: false,
     };
+    let [lx, ly, lz] = lo;
     render_tiles(w, h, &tiles, bg, move |_, u, v| match k {
-        0 => idx(u, v, z0),
-        1 => idx(x0, v, u),
-        _ => idx(u, y0, v),
+        0 => idx(lx + u, ly + v, z0),
+        1 => idx(x0, ly + v, lz + u),
+        _ => idx(lx + u, y0, lz + v),
     })
 }
 
@@ -489,6 +569,7 @@ fn edges_3d(
                 e.depth[0] + (e.depth[1] - e.depth[0]) * t1,
             ],
             visible: e.visible,
+            color: e.color,
         };
         match opts
             .cutaway
@@ -538,6 +619,7 @@ fn project(edges: &[Edge3], cam: &Camera3) -> Vec<PixelEdge> {
                 z: [za, zb],
                 depth: [da, db],
                 visible: e.visible,
+                color: e.color,
             })
         })
         .collect()

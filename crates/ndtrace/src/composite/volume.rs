@@ -278,6 +278,9 @@ pub(super) struct Camera3 {
     up: DVec3,
     /// Image-plane units per pixel (at unit distance for perspective).
     pixel: f64,
+    /// The picture position of the view axis, pixels: the picture's centre unless
+    /// [`Camera3::centred_on`] moved it.
+    centre: [f64; 2],
 }
 
 impl Camera3 {
@@ -328,7 +331,36 @@ impl Camera3 {
             right: to_cell_dir(right_w),
             up: to_cell_dir(up_w),
             pixel,
+            centre: [w as f64 / 2.0, h as f64 / 2.0],
         }
+    }
+
+    /// The camera with its view axis moved in the picture so that the box of the projections
+    /// of `points` (cell coordinates) is centred: equal margins left and right, top and
+    /// bottom. Unchanged when no point projects.
+    pub(super) fn centred_on(mut self, points: &[DVec3]) -> Self {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for &p in points {
+            if let Some((q, _)) = self.project(p) {
+                for k in 0..2 {
+                    lo[k] = lo[k].min(q[k]);
+                    hi[k] = hi[k].max(q[k]);
+                }
+            }
+        }
+        if lo[0].is_finite() && lo[1].is_finite() {
+            let target = [self.w as f64 / 2.0, self.h as f64 / 2.0];
+            for k in 0..2 {
+                self.centre[k] += target[k] - (lo[k] + hi[k]) / 2.0;
+            }
+        }
+        self
+    }
+
+    /// The camera's right, up and forward directions, unit, in cell coordinates (column, row,
+    /// slice: y down the rows).
+    pub(super) fn basis(&self) -> (DVec3, DVec3, DVec3) {
+        (self.right, self.up, self.fwd)
     }
 
     /// The picture position (x right, y down, in pixels: pixel (i, j) spans [i, i + 1] ×
@@ -348,8 +380,8 @@ impl Camera3 {
         };
         Some((
             [
-                sx / self.pixel + self.w as f64 / 2.0,
-                self.h as f64 / 2.0 - sy / self.pixel,
+                sx / self.pixel + self.centre[0],
+                self.centre[1] - sy / self.pixel,
             ],
             z,
         ))
@@ -423,8 +455,8 @@ impl Camera3 {
     /// stay ≥ 0.
     #[inline]
     pub(super) fn ray_at(&self, x: f64, y: f64) -> (DVec3, DVec3, bool) {
-        let sx = (x - self.w as f64 / 2.0) * self.pixel;
-        let sy = (self.h as f64 / 2.0 - y) * self.pixel;
+        let sx = (x - self.centre[0]) * self.pixel;
+        let sy = (self.centre[1] - y) * self.pixel;
         if self.ortho {
             (self.eye + self.right * sx + self.up * sy, self.fwd, false)
         } else {

@@ -237,3 +237,46 @@ shape = "hypercube"
     let (vis, hid) = check_against_brute_force(scene);
     assert!(((vis + hid) - 160.0).abs() < 1e-9 && vis > 0.0 && hid > 0.0);
 }
+
+#[test]
+fn edge_directions_give_parallel_edges_one_colour_in_the_objects_own_axes() {
+    // The tesseract turned 20° in x–w: its 32 edges in 4 directions, named in its own axes.
+    let text = r#"dim = 4
+[camera]
+position = [1.2, 1.6, 2.0, 4.5]
+look_at = [0, 0, 0, 0]
+up = [[0, 1, 0, 0], [0, 0, 1, 0]]
+fov = 50
+resolution = 16
+[[objects]]
+shape = "hypercube"
+transform = [{ rotate = { plane = [0, 3], degrees = 20 } }]
+"#;
+    let scene = match load_toml_str(text, "t.toml", None).unwrap().1 {
+        crate::scene::AnyScene::D4(s) => s,
+        _ => unreachable!(),
+    };
+    let dirs = edge_directions(&scene, 20.0).unwrap();
+    assert_eq!(dirs.len(), 4);
+    let palette = crate::texture::palette::get("tab10").unwrap();
+    for (k, d) in dirs.iter().enumerate() {
+        // Its own direction is axis k (x, y, z, w in order), its colour the palette's k-th.
+        let axis = d.own.iter().position(|x| (x - 1.0).abs() < 1e-9);
+        assert_eq!(axis, Some(k), "{:?}", d.own);
+        assert_eq!(d.color, palette.color(k));
+    }
+    // In the retina, every piece takes its direction's colour: 4 colours, and the pieces along
+    // one direction share one.
+    let edges = retina_edges(&scene, 20.0).unwrap();
+    let mut colors: Vec<[f32; 3]> = edges.iter().map(|e| e.color).collect();
+    colors.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    colors.dedup();
+    assert_eq!(colors.len(), 4);
+    for e in &edges {
+        let d = &dirs
+            .iter()
+            .find(|d| d.color.map(|c| c as f32) == e.color)
+            .unwrap();
+        assert!(d.object == 0);
+    }
+}

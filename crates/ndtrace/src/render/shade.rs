@@ -111,7 +111,19 @@ pub(super) fn hit_color<const N: usize>(
 ) -> Option<Rgb> {
     let o = &scene.objects[obj];
     let t = o.texture.as_ref()?;
-    Some(t.color(&o.material.color, &o.mesh, local, &hit.bary, &ray.at(hit.t)))
+    // The N-D depth only for `color_by = "depth"`.
+    let depth = match t.depth {
+        Some(_) => scene.camera.depth(hit.t, norm(&ray.dir)),
+        None => 0.0,
+    };
+    Some(t.color(
+        &o.material.color,
+        &o.mesh,
+        local,
+        &hit.bary,
+        &ray.at(hit.t),
+        depth,
+    ))
 }
 
 /// The unit shading normal at a hit on simplex `local` of object `obj`: flat (eq. 6) or

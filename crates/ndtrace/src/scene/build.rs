@@ -291,6 +291,47 @@ pub(super) fn extent_of<const N: usize>(
     }
 }
 
+/// The colours of `material.color_by` that depend on the scene: `"object"` gives object k
+/// the palette's colour k, and `"depth"` without a `range` maps the depths of the object's
+/// vertices from `camera` (the distance from the eye, or from the image plane for
+/// orthographic), nearest to farthest, onto its colormap.
+fn structure_colors<const N: usize>(objects: &mut [Object<N>], camera: &Camera<N>) {
+    let view = camera.axis(N - 1);
+    let depth = |v: &Vector<N>| {
+        let d: Vector<N> = std::array::from_fn(|k| v[k] - camera.position[k]);
+        match camera.projection {
+            crate::camera::Projection::Perspective => norm(&d),
+            crate::camera::Projection::Orthographic => dot(&d, &view),
+        }
+    };
+    for (k, o) in objects.iter_mut().enumerate() {
+        if o.material.color_by == Some(super::desc::ColorBy::Object) {
+            o.material.color = o.material.palette.color(k);
+        }
+        let vertices = &o.mesh.vertices;
+        if let Some((_, range)) = o.texture.as_mut().and_then(|t| t.depth.as_mut()) {
+            if range[0].is_nan() {
+                let (lo, hi) = (vertices.par_iter().map(depth))
+                    .fold(
+                        || (f64::INFINITY, f64::NEG_INFINITY),
+                        |(lo, hi), d| (lo.min(d), hi.max(d)),
+                    )
+                    .reduce(
+                        || (f64::INFINITY, f64::NEG_INFINITY),
+                        |a, b| (a.0.min(b.0), a.1.max(b.1)),
+                    );
+                *range = if hi > lo {
+                    [lo, hi]
+                } else if lo.is_finite() {
+                    [lo - 1.0, lo + 1.0]
+                } else {
+                    [0.0, 1.0]
+                };
+            }
+        }
+    }
+}
+
 /// What a build makes before the BVH: the checked colours, camera and lights, and the objects
 /// in world space (with the warnings about their surfaces).
 pub(super) struct Parts<const N: usize> {
@@ -368,6 +409,7 @@ pub(super) fn parts<const N: usize>(
         maps.push(map);
         own.push(mine);
     }
+    structure_colors(&mut objects, &camera);
     Ok(Parts {
         background,
         ambient,

@@ -207,6 +207,7 @@ pub(crate) fn clips<const N: usize>(
                 convex: None,
                 surface: None,
                 texture: None,
+                own_from_world: parent.own_from_world,
             });
             per.push(ObjectClips {
                 planes,

@@ -411,6 +411,10 @@ impl ShapeKind {
 pub struct ObjectDesc {
     /// What to build.
     pub shape: ShapeKind,
+    /// What the object stands for, in the picture's legend (a swatch of its colour with this
+    /// text).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
     /// Mesh and surface: vertex positions (V, N).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub vertices: Option<Rows<f64>>,
@@ -628,6 +632,26 @@ pub struct MaterialDesc {
     /// A cubic lattice texture on the object's own x, y, z coordinates.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lattice: Option<LatticeDesc>,
+    /// Colour by structure instead of `color`: `"cell"`, `"object"` or `"depth"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color_by: Option<ColorBy>,
+    /// The qualitative palette of `color_by` and of edges coloured by direction (matplotlib's
+    /// names; default `"tab10"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub palette: Option<String>,
+}
+
+/// `material.color_by`: colour by structure.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ColorBy {
+    /// Each flat cell (the connected simplices of one hyperplane) a colour of the palette;
+    /// cells in parallel hyperplanes share one.
+    Cell,
+    /// Each object colour k of the palette, k its index in the scene.
+    Object,
+    /// The N-D depth of the hit (distance from the eye) through the material's colormap.
+    Depth,
 }
 
 /// `material.isolines`: bands where the interpolated per-vertex values cross each of `values`.
@@ -691,6 +715,8 @@ impl Default for MaterialDesc {
             range: None,
             isolines: None,
             lattice: None,
+            color_by: None,
+            palette: None,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! (course notes, Part II(B) "4D Shading": the Lambert and Blinn–Phong terms), with its
 //! texture keys (colormap, isolines, cubic lattice: Part II(B)'s cues for 3D fields).
 
-use super::desc::MaterialDesc;
+use super::desc::{ColorBy, MaterialDesc};
 use super::errors::PathError;
 use super::fields::{coefficient, rgb, R};
 use crate::linalg::Rgb;
@@ -24,9 +24,18 @@ pub struct Material {
     pub smooth: bool,
     /// Fraction of light stopped (surface objects; 1 for every other object).
     pub opacity: f64,
-    /// Colour varying over the object: colormap, isolines, lattice.
+    /// Colour varying over the object: colormap, isolines, lattice, colour by cell or depth.
     pub texture: Option<crate::texture::TextureSpec>,
+    /// Colour by structure (`"object"` is resolved by the build: the palette's colour of the
+    /// object's index replaces `color`).
+    pub color_by: Option<ColorBy>,
+    /// The qualitative palette of `color_by` and of edges coloured by direction.
+    pub palette: crate::texture::Palette,
 }
+
+/// The colormap of `color_by = "depth"` when a material names none: warm near the eye, cool
+/// far from it, as the course's depth cueing.
+pub const DEPTH_COLORMAP: &str = "coolwarm_r";
 
 /// The material a `material` table describes, its coefficients resolved to RGB and checked
 /// (`path` locates errors).
@@ -52,14 +61,54 @@ pub(super) fn material(m: &MaterialDesc, path: &str) -> R<Material> {
         smooth: m.smooth,
         opacity: m.opacity,
         texture: texture_spec(m, path)?,
+        color_by: m.color_by,
+        palette: palette(m, path)?,
+    })
+}
+
+/// The material's `palette` (default [`DEFAULT_PALETTE`](crate::texture::palette::DEFAULT_PALETTE)).
+fn palette(m: &MaterialDesc, path: &str) -> R<crate::texture::Palette> {
+    use crate::texture::palette;
+    let name = m.palette.as_deref().unwrap_or(palette::DEFAULT_PALETTE);
+    palette::get(name).ok_or_else(|| {
+        PathError::new(
+            format!("{path}.palette"),
+            format!(
+                "unknown palette \"{name}\" (known: {})",
+                palette::names().join(", ")
+            ),
+        )
     })
 }
 
 /// The texture keys of a material (`colormap`, `range`, `isolines`, `lattice`).
 fn texture_spec(m: &MaterialDesc, path: &str) -> R<Option<crate::texture::TextureSpec>> {
     use crate::texture::{colormap, Isolines, Lattice, TextureSpec};
-    let colormap = match &m.colormap {
-        None => {
+    let by_depth = m.color_by == Some(ColorBy::Depth);
+    if m.colormap.is_some() && matches!(m.color_by, Some(ColorBy::Cell | ColorBy::Object)) {
+        return Err(PathError::new(
+            format!("{path}.color_by"),
+            "colormap and color_by both set the colour: give one (color_by = \"depth\" takes the colormap for its ramp)",
+        ));
+    }
+    let range = match &m.range {
+        None => None,
+        Some(r) => match r[..] {
+            [lo, hi] if lo.is_finite() && hi.is_finite() && hi != lo => Some([lo, hi]),
+            _ => {
+                return Err(PathError::new(
+                    format!("{path}.range"),
+                    format!("expected [low, high], two different finite numbers, got {r:?}"),
+                ))
+            }
+        },
+    };
+    let colormap = match (&m.colormap, by_depth) {
+        (None, true) => Some((
+            colormap::get(DEPTH_COLORMAP).expect("the depth colormap is shipped"),
+            range,
+        )),
+        (None, false) => {
             if m.range.is_some() {
                 return Err(PathError::new(
                     format!("{path}.range"),
@@ -68,7 +117,7 @@ fn texture_spec(m: &MaterialDesc, path: &str) -> R<Option<crate::texture::Textur
             }
             None
         }
-        Some(name) => {
+        (Some(name), _) => {
             let map = colormap::get(name).ok_or_else(|| {
                 PathError::new(
                     format!("{path}.colormap"),
@@ -78,20 +127,6 @@ fn texture_spec(m: &MaterialDesc, path: &str) -> R<Option<crate::texture::Textur
                     ),
                 )
             })?;
-            let range = match &m.range {
-                None => None,
-                Some(r) => match r[..] {
-                    [lo, hi] if lo.is_finite() && hi.is_finite() && hi != lo => Some([lo, hi]),
-                    _ => {
-                        return Err(PathError::new(
-                            format!("{path}.range"),
-                            format!(
-                                "expected [low, high], two different finite numbers, got {r:?}"
-                            ),
-                        ))
-                    }
-                },
-            };
             Some((map, range))
         }
     };
@@ -145,11 +180,18 @@ fn texture_spec(m: &MaterialDesc, path: &str) -> R<Option<crate::texture::Textur
             })
         }
     };
+    let by_cell = match m.color_by {
+        Some(ColorBy::Cell) => Some(palette(m, path)?),
+        _ => None,
+    };
     Ok(
-        (colormap.is_some() || isolines.is_some() || lattice.is_some()).then_some(TextureSpec {
-            colormap,
-            isolines,
-            lattice,
-        }),
+        (colormap.is_some() || isolines.is_some() || lattice.is_some() || by_cell.is_some())
+            .then_some(TextureSpec {
+                colormap,
+                isolines,
+                lattice,
+                by_cell,
+                by_depth,
+            }),
     )
 }

@@ -23,7 +23,7 @@ pub use build::Scene;
 pub use desc::SceneDesc;
 pub use errors::PathError;
 pub use lights::Light;
-pub use material::Material;
+pub use material::{Material, DEPTH_COLORMAP};
 pub use mesh_file::MeshReader;
 pub use objects::{Object, MAX_GENERATED_SIMPLICES};
 

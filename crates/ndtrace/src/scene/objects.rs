@@ -41,6 +41,9 @@ pub struct Object<const N: usize> {
     pub surface: Option<crate::surface::Surface<N>>,
     /// Colour varying over the object ([`crate::texture`]).
     pub texture: Option<crate::texture::Texture<N>>,
+    /// World directions → the object's own (A⁻¹ of its transform x ↦ A·x + b; the identity
+    /// when A is singular): the legend names the directions of edges in the object's axes.
+    pub own_from_world: Matrix<N>,
 }
 
 /// What the index may assume of an object of shape `shape` ([`ShapeHints`]): the generated
@@ -139,6 +142,36 @@ pub(super) fn world_object<const N: usize>(
         }
         values = Some(v.to_vec());
     }
+    if mat.color_by == Some(super::desc::ColorBy::Cell) {
+        // A tessellation of a curved boundary has no cells to tell apart: each simplex would
+        // be a cell of its own.
+        let curved = match o.shape {
+            ShapeKind::Surface => Some("a surface has triangles, not cells"),
+            ShapeKind::Sphere => Some("a sphere's simplices approximate a curved boundary"),
+            ShapeKind::Elevation => Some("an elevation map is a curved graph"),
+            _ if mat.smooth => Some("a smooth material shades it as a curved boundary"),
+            _ => None,
+        };
+        if let Some(why) = curved {
+            return Err(PathError::new(
+                format!("{path}.material.color_by"),
+                format!(
+                    "\"cell\" needs a mesh of flat cells (coplanar simplices, such as a polytope's): {why}; use \"object\" or \"depth\""
+                ),
+            ));
+        }
+    }
+    // The cells of `color_by = "cell"`, found in the object's own space (before its transform),
+    // so that their normals read in its own axes.
+    let cells = (mat.texture.as_ref())
+        .and_then(|t| t.by_cell.as_ref())
+        .map(|palette| {
+            let classes = crate::texture::cells::cell_classes(&mesh);
+            let colors = (0..classes.normals.len())
+                .map(|k| palette.color(k))
+                .collect();
+            crate::texture::CellColors { classes, colors }
+        });
     if let Some(spec) = &mat.texture {
         if o.shape == ShapeKind::Surface {
             return Err(PathError::new(
@@ -232,19 +265,26 @@ pub(super) fn world_object<const N: usize>(
         None => (mat.smooth && surface.is_none()).then(|| shapes::vertex_normals(&mesh)),
     };
     let texture = mat.texture.as_ref().map(|spec| {
-        let colormap = spec.colormap.as_ref().map(|(map, range)| {
-            let range = range.unwrap_or_else(|| {
-                let v = values.as_deref().unwrap_or(&[]);
-                let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-                let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-                if hi > lo {
-                    [lo, hi]
-                } else {
-                    [lo - 1.0, lo + 1.0]
-                }
+        // `color_by = "depth"`: the range, unless given, is the scene's camera's (set by the
+        // build, `depth_ranges`).
+        let depth = (spec.colormap.as_ref())
+            .filter(|_| spec.by_depth)
+            .map(|(map, range)| (map.clone(), range.unwrap_or([f64::NAN; 2])));
+        let colormap = (spec.colormap.as_ref())
+            .filter(|_| !spec.by_depth)
+            .map(|(map, range)| {
+                let range = range.unwrap_or_else(|| {
+                    let v = values.as_deref().unwrap_or(&[]);
+                    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+                    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    if hi > lo {
+                        [lo, hi]
+                    } else {
+                        [lo - 1.0, lo + 1.0]
+                    }
+                });
+                (map.clone(), range)
             });
-            (map.clone(), range)
-        });
         let inverse = transpose(&inverse_t);
         crate::texture::Texture {
             values: values.take(),
@@ -252,8 +292,13 @@ pub(super) fn world_object<const N: usize>(
             isolines: spec.isolines.clone(),
             lattice: spec.lattice.clone(),
             to_object: (inverse, scale(&mat_vec(&inverse, &b), -1.0)),
+            cells,
+            depth,
         }
     });
+    let own_from_world = Some(transpose(&inverse_t))
+        .filter(|m| m.iter().flatten().all(|x| x.is_finite()))
+        .unwrap_or_else(identity::<N>);
     let object = Object {
         mesh,
         material: mat,
@@ -261,6 +306,7 @@ pub(super) fn world_object<const N: usize>(
         convex: None,
         surface,
         texture,
+        own_from_world,
     };
     Ok(WorldObject { object, map, own })
 }

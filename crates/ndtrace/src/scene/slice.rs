@@ -103,6 +103,7 @@ pub fn slice_desc<const N: usize>(
             transform: Vec::new(),
             clip: clips_in(&d.clip, &plane),
             cap: d.cap,
+            label: d.label.clone(),
         });
     }
     // 2. The camera.

@@ -29,7 +29,7 @@ impl Colormap {
 const DATA: &str = include_str!("../../data/colormaps.txt");
 
 /// sRGB → linear transfer function.
-fn srgb_to_linear(x: f64) -> f64 {
+pub(crate) fn srgb_to_linear(x: f64) -> f64 {
     if x <= 0.04045 {
         x / 12.92
     } else {

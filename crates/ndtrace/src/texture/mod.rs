@@ -8,15 +8,22 @@
 //!   that the grid moves with the object), drawn as bands of a given width — a cubic lattice
 //!   whose walls cut every visible part of the retina's volume image in lines.
 //!
+//! - colour **by structure** (`material.color_by`): each flat cell a colour of a qualitative
+//!   [`palette`] ([`cells`]), or the hit's N-D depth through a colormap.
+//!
 //! The colour C at a hit replaces the material's colour in the lighting sum of
 //! [`crate::render::shade_hit`].
 
+pub mod cells;
 pub mod colormap;
+pub mod palette;
 
 use crate::linalg::Rgb;
 use crate::linalg::{add, dot, mat_vec, solve_block, sub, Matrix, Vector};
 use crate::mesh::Mesh;
+pub use cells::CellClasses;
 pub use colormap::Colormap;
+pub use palette::Palette;
 
 /// Bands where a per-vertex scalar crosses given values.
 #[derive(Debug, Clone, PartialEq)]
@@ -43,19 +50,33 @@ pub struct Lattice {
 /// A material's texture before it meets its object (the values and the transform).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TextureSpec {
-    /// The colormap and, when given, the value range mapped onto it.
+    /// The colormap and, when given, the range mapped onto it: of the values, or with
+    /// `by_depth` of the hit's depth.
     pub colormap: Option<(Colormap, Option<[f64; 2]>)>,
     /// Isosurface markings.
     pub isolines: Option<Isolines>,
     /// The lattice.
     pub lattice: Option<Lattice>,
+    /// `color_by = "cell"`: the palette the cells' classes take their colours from.
+    pub by_cell: Option<Palette>,
+    /// `color_by = "depth"`: the colormap maps the hit's N-D depth, not the values.
+    pub by_depth: bool,
 }
 
 impl TextureSpec {
     /// Whether the spec needs per-vertex values.
     pub fn needs_values(&self) -> bool {
-        self.colormap.is_some() || self.isolines.is_some()
+        (self.colormap.is_some() && !self.by_depth) || self.isolines.is_some()
     }
+}
+
+/// Per simplex, the colour of its cell (`color_by = "cell"`).
+#[derive(Debug, Clone)]
+pub struct CellColors<const N: usize> {
+    /// The cells' classes (by the direction of their hyperplane, in the object's own space).
+    pub classes: CellClasses<N>,
+    /// Per class, its colour (the palette's colour of the class's index).
+    pub colors: Vec<Rgb>,
 }
 
 /// The texture of one object.
@@ -71,11 +92,16 @@ pub struct Texture<const N: usize> {
     pub lattice: Option<Lattice>,
     /// World space → the object's own space (the inverse of its transform), for the lattice.
     pub to_object: (Matrix<N>, Vector<N>),
+    /// `color_by = "cell"`: each simplex the colour of its cell.
+    pub cells: Option<CellColors<N>>,
+    /// `color_by = "depth"`: the colormap and the depth range mapped onto it.
+    pub depth: Option<(Colormap, [f64; 2])>,
 }
 
 impl<const N: usize> Texture<N> {
     /// The colour C at the point `x` (world space) of simplex `local` of `mesh`, with barycentric
-    /// coordinates `bary`; `base` is the material's colour.
+    /// coordinates `bary` and N-D depth `depth` (used by `color_by = "depth"` only); `base` is
+    /// the material's colour.
     pub fn color(
         &self,
         base: &Rgb,
@@ -83,6 +109,7 @@ impl<const N: usize> Texture<N> {
         local: usize,
         bary: &[f64; N],
         x: &Vector<N>,
+        depth: f64,
     ) -> Rgb {
         let idx = &mesh.simplices[local];
         let value = |vals: &[f64]| {
@@ -93,6 +120,14 @@ impl<const N: usize> Texture<N> {
             v
         };
         let mut c = *base;
+        if let Some(cells) = &self.cells {
+            if let Some(k) = cells.colors.get(cells.classes.class[local] as usize) {
+                c = *k;
+            }
+        }
+        if let Some((map, [lo, hi])) = &self.depth {
+            c = map.at((depth - lo) / (hi - lo));
+        }
         if let (Some(vals), Some((map, [lo, hi]))) = (&self.values, &self.colormap) {
             c = map.at((value(vals) - lo) / (hi - lo));
         }

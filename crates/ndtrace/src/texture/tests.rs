@@ -104,10 +104,12 @@ fn isolines_and_the_lattice_fall_where_they_should() {
         }),
         lattice: None,
         to_object: ident,
+        cells: None,
+        depth: None,
     };
     let at = |t: &Texture<4>, x: f64, y: f64, z: f64| {
         let bary = [1.0 - x - y - z, x, y, z];
-        t.color(&base, &mesh, 0, &bary, &[x, y, z, 0.0])
+        t.color(&base, &mesh, 0, &bary, &[x, y, z, 0.0], 0.0)
     };
     assert_eq!(at(&t, 0.3, 0.1, 0.1), [1.0, 0.0, 0.0]);
     assert_eq!(at(&t, 0.34, 0.1, 0.1), [1.0, 0.0, 0.0]);
@@ -148,4 +150,43 @@ fn isolines_and_the_lattice_fall_where_they_should() {
     };
     let c = at(&cm, 1.0, 0.0, 0.0);
     assert!((c[0] - 1.0).abs() < 1e-9);
+}
+
+#[test]
+fn depth_maps_the_hit_depth_and_cells_their_class_colour() {
+    let mesh = Mesh::<4> {
+        vertices: vec![
+            [0.0; 4],
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ],
+        simplices: vec![[0, 1, 2, 3]],
+    };
+    let gray = colormap::get("gray").unwrap();
+    let t = Texture::<4> {
+        values: None,
+        colormap: None,
+        isolines: None,
+        lattice: None,
+        to_object: (crate::linalg::identity::<4>(), [0.0; 4]),
+        cells: None,
+        depth: Some((gray, [2.0, 4.0])),
+    };
+    let bary = [0.25; 4];
+    let at = |t: &Texture<4>, d: f64| t.color(&[0.5; 3], &mesh, 0, &bary, &[0.25; 4], d);
+    // Linear in depth over the range, clamped beyond it.
+    assert!(at(&t, 2.0)[0] < 1e-9 && (at(&t, 4.0)[0] - 1.0).abs() < 1e-9);
+    assert_eq!(at(&t, 1.0), at(&t, 2.0));
+    assert!(at(&t, 3.0)[0] > at(&t, 2.5)[0]);
+    // A cell's colour is its class's.
+    let cells = Texture::<4> {
+        depth: None,
+        cells: Some(CellColors {
+            classes: cells::cell_classes(&mesh),
+            colors: vec![[0.1, 0.2, 0.3]],
+        }),
+        ..t.clone()
+    };
+    assert_eq!(at(&cells, 3.0), [0.1, 0.2, 0.3]);
 }

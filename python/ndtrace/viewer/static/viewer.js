@@ -52,6 +52,9 @@ export function mount(root, transport) {
   let arcballMode = false;
   let rollHelp = "";
 
+  /** The option value of a select's choice: its text ("volume", "auto", "true", "false"). */
+  const choiceValue = (c) => String(c);
+
   // -- layout --------------------------------------------------------------------------
   const canvas = el("canvas", { class: "ndv-canvas", width: 512, height: 512, tabindex: 0 });
   const badge = el("div", { class: "ndv-badge", text: "connecting…" });
@@ -214,6 +217,8 @@ export function mount(root, transport) {
         const v = aid.name in o ? o[aid.name] : aid.default;
         if (aid.kind === "bool") input.checked = !!v;
         else if (aid.kind === "text") input.value = v == null ? "" : typeof v === "string" ? JSON.stringify(v) : tomlValue(v);
+        else if (aid.kind === "choice") input.value = choiceValue(v);
+        else if (aid.kind === "string") input.value = v ?? "";
         else input.value = v;
       }
     }
@@ -265,8 +270,15 @@ export function mount(root, transport) {
       input = el("input", { type: "checkbox" });
       input.addEventListener("change", () => send({ type: "set", options: { [aid.name]: input.checked } }));
     } else if (aid.kind === "choice") {
-      input = el("select", {}, ...aid.choices.map((c) => el("option", { value: c, text: c })));
-      input.addEventListener("change", () => send({ type: "set", options: { [aid.name]: input.value } }));
+      // Choices may be strings or booleans (legend: "auto", true, false): options by index.
+      // A choice's option value is its name ("volume", "auto", "true"): the choices of legend
+      // and axes mix a string with booleans, sent back as the choice itself.
+      input = el("select", {}, ...aid.choices.map((c) => el("option", { value: choiceValue(c), text: String(c) })));
+      input.addEventListener("change", () => send({ type: "set", options: {
+        [aid.name]: aid.choices.find((c) => choiceValue(c) === input.value) } }));
+    } else if (aid.kind === "string") {
+      input = el("input", { type: "text", placeholder: "none", spellcheck: "false" });
+      input.addEventListener("change", () => send({ type: "set", options: { [aid.name]: input.value === "" ? null : input.value } }));
     } else if (aid.kind === "number") {
       input = el("input", { type: "number", step: "any" });
       input.addEventListener("change", () => send({ type: "set", options: { [aid.name]: Number(input.value) } }));

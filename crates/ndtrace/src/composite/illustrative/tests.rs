@@ -15,6 +15,7 @@ fn options(size: (usize, usize)) -> CompositeOptions {
         projection: Projection::Orthographic,
         size,
         fit: false,
+        edge_color_by: EdgeColorBy::None,
         ..Default::default()
     }
 }
@@ -166,6 +167,7 @@ fn visible_edges_are_solid_and_hidden_ones_dashed() {
             b: [0.0; MAX_RETINA_DIM],
             depth: [3.0, 4.0],
             visible,
+            color: [1.0; 3],
         };
         e.a[..3].copy_from_slice(&[4.0, row, 0.0]);
         e.b[..3].copy_from_slice(&[4.0, row, 8.0]);
@@ -346,6 +348,7 @@ fn illustrative_pictures_do_not_depend_on_the_thread_count() {
         b: [11.0, 8.0, 12.0, 0.0, 0.0, 0.0, 0.0],
         depth: [2.0, 3.0],
         visible: true,
+        color: [1.0; 3],
     }];
     let extras = RetinaExtras {
         normal: Some(&normal),
@@ -598,4 +601,66 @@ fn smoothing_is_the_filter_written_cell_by_cell_bit_for_bit() {
             );
         }
     }
+}
+
+#[test]
+fn edges_by_depth_are_thicker_and_stronger_near_the_eye_and_by_direction_take_their_colour() {
+    // One visible edge across the picture, its depth from 2 (left) to 10 (right), and a second
+    // far one at depth 10 fixing the range's far end.
+    let shape = [8, 8, 8];
+    let rgba = vec![0f32; 8 * 8 * 8 * 4];
+    let edge = |row: f64, depth: [f64; 2]| {
+        let mut e = RetinaEdge {
+            a: [0.0; MAX_RETINA_DIM],
+            b: [0.0; MAX_RETINA_DIM],
+            depth,
+            visible: true,
+            color: [0.9, 0.1, 0.2],
+        };
+        e.a[..3].copy_from_slice(&[4.0, row, 0.0]);
+        e.b[..3].copy_from_slice(&[4.0, row, 8.0]);
+        e
+    };
+    let edges = [edge(2.0, [2.0, 10.0]), edge(6.0, [10.0, 10.0])];
+    let extras = RetinaExtras {
+        edges: &edges,
+        ..Default::default()
+    };
+    let pixels_per_cell = 96.0 / (8.0 * 3f64.sqrt());
+    let y_of = |row: f64| 48.0 + (row - 4.0) * pixels_per_cell;
+    // The covered rows of column x around the line's row, weighted by alpha: its width there.
+    let width = |img: &crate::composite::Image, x: usize, row: f64| -> f32 {
+        let y = y_of(row) as usize;
+        (y - 8..y + 8).map(|py| img.pixel(x, py)[3]).sum()
+    };
+    let o = CompositeOptions {
+        edge_width: 4.0,
+        edge_color_by: EdgeColorBy::Depth,
+        ..options((96, 96))
+    };
+    let img = composite_retina(&rgba, None, &shape, &extras, &o).unwrap();
+    let (near, far) = (width(&img, 22, 2.0), width(&img, 74, 2.0));
+    assert!(near > 1.8 * far, "near {near}, far {far}");
+    // The farthest edge: thin and faint.
+    let faint = img.pixel(48, y_of(6.0) as usize)[3];
+    assert!(faint < 0.5 && faint > 0.2, "{faint}");
+    // By direction: the edge's colour, widths by depth still.
+    let o = CompositeOptions {
+        edge_color_by: EdgeColorBy::Direction,
+        ..o
+    };
+    let img = composite_retina(&rgba, None, &shape, &extras, &o).unwrap();
+    let p = img.pixel(22, y_of(2.0) as usize);
+    assert!(
+        (p[0] - 0.9).abs() < 0.02 && (p[1] - 0.1).abs() < 0.02,
+        "{p:?}"
+    );
+    assert!(width(&img, 22, 2.0) > 1.8 * width(&img, 74, 2.0));
+    // None: one width.
+    let o = CompositeOptions {
+        edge_color_by: EdgeColorBy::None,
+        ..o
+    };
+    let img = composite_retina(&rgba, None, &shape, &extras, &o).unwrap();
+    assert!((width(&img, 22, 2.0) - width(&img, 74, 2.0)).abs() < 0.3);
 }

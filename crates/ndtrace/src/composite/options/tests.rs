@@ -30,6 +30,11 @@ stereo_angle = 4.0
 turntable = 12
 samples = 9
 detail = "retina"
+legend = true
+axes = false
+axes_frame = [[0.0, 1.0], [-1.0, 0.0]]
+title = "A title"
+edge_color_by = "direction"
 
 [cutaway]
 shape = "sphere"
@@ -70,6 +75,11 @@ fn every_key_sets_its_own_field_and_is_written_back() {
         section: [0.5, -0.25, 0.0],
         stereo_angle: 4.0,
         turntable: 12,
+        legend: Toggle::On,
+        axes: Toggle::Off,
+        axes_frame: Some(vec![vec![0.0, 1.0], vec![-1.0, 0.0]]),
+        title: Some("A title".into()),
+        edge_color_by: EdgeColorBy::Direction,
         cutaway: Some(Cutaway::Sphere {
             center: [0.0, 0.25, 0.0],
             radius: 0.5,
@@ -123,8 +133,9 @@ fn a_table_is_written_back_with_the_keys_it_gave() {
     );
     assert_eq!(toml::to_string(&CompositeOptions::default()).unwrap(), "");
     let every = toml::to_string(&CompositeOptions::default().with_every_key()).unwrap();
-    // TOML has no null: `edge_color`, `cutaway` and `cubes`, None by default, are left out.
-    assert_eq!(every.lines().count(), CompositeOptions::KEYS.len() - 3);
+    // TOML has no null: `edge_color`, `axes_frame`, `title`, `cutaway` and `cubes`, None by
+    // default, are left out.
+    assert_eq!(every.lines().count(), CompositeOptions::KEYS.len() - 5);
     // (The keys left out are not given when read back.)
     assert_eq!(
         toml::from_str::<CompositeOptions>(&every)
@@ -325,4 +336,66 @@ fn a_bad_value_gets_one_message_whichever_way_it_arrives() {
         e.contains(": composite.stages[0]: (f, d) = (1, 0.5): need f > 0 and d > 1"),
         "{e}"
     );
+}
+
+#[test]
+fn legend_and_axes_take_auto_true_or_false() {
+    for (text, want) in [
+        ("\"auto\"", Toggle::Auto),
+        ("true", Toggle::On),
+        ("false", Toggle::Off),
+    ] {
+        let o: CompositeOptions =
+            toml::from_str(&format!("legend = {text}\naxes = {text}")).unwrap();
+        assert_eq!((o.legend, o.axes), (want, want));
+        assert_eq!(
+            toml::to_string(&o).unwrap(),
+            format!("legend = {text}\naxes = {text}\n")
+        );
+    }
+    let bad = toml::from_str::<CompositeOptions>("legend = \"yes\"")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        bad.contains("expected \"auto\", true or false, got \"yes\""),
+        "{bad}"
+    );
+    let bad = toml::from_str::<CompositeOptions>("axes = 1")
+        .unwrap_err()
+        .to_string();
+    assert!(bad.contains("\"auto\", true or false"), "{bad}");
+    assert!(Toggle::Auto.resolve(true) && !Toggle::Auto.resolve(false));
+    assert!(Toggle::On.resolve(false) && !Toggle::Off.resolve(true));
+}
+
+#[test]
+fn title_and_axes_frame_are_checked() {
+    let long = CompositeOptions {
+        title: Some("x".repeat(MAX_TITLE_CHARS + 1)),
+        ..Default::default()
+    };
+    assert_eq!(long.validate().unwrap_err().key, "title");
+    let two = CompositeOptions {
+        title: Some("a\nb".into()),
+        ..Default::default()
+    };
+    assert_eq!(two.validate().unwrap_err().key, "title");
+    let nan = CompositeOptions {
+        axes_frame: Some(vec![vec![1.0, f64::NAN], vec![0.0, 1.0]]),
+        ..Default::default()
+    };
+    assert_eq!(nan.validate().unwrap_err().key, "axes_frame[0][1]");
+    // N×N for the retina's N.
+    let square = CompositeOptions {
+        axes_frame: Some(vec![vec![1.0, 0.0], vec![0.0, 1.0]]),
+        ..Default::default()
+    };
+    let e = square.validate_for(&[4, 4, 4], false).unwrap_err();
+    assert_eq!(e.key, "axes_frame");
+    assert!(
+        e.message.contains("expected 4 rows of 4 numbers"),
+        "{}",
+        e.message
+    );
+    assert!(square.validate_for(&[4], false).is_ok());
 }
