@@ -28,13 +28,13 @@ layout = "stereo"
 section = [0.5, -0.25, 0.0]
 stereo_angle = 4.0
 turntable = 12
-samples = 9
-detail = "retina"
 legend = true
 axes = false
 axes_frame = [[0.0, 1.0], [-1.0, 0.0]]
 title = "A title"
 edge_color_by = "direction"
+samples = 9
+detail = "retina"
 
 [cutaway]
 shape = "sphere"
