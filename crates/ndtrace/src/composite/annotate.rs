@@ -464,7 +464,7 @@ pub fn hull(shape: &[usize], cells: &[[f32; 4]]) -> Option<Hull> {
 }
 
 /// The [`Hull`] of points (cell coordinates; the vertices of a structure, any number): the
-/// corners of the [`HULL_GRID`]³ bins of their box that hold one, or `None` without points.
+/// corners of the 12³ bins of their box that hold one, or `None` without points.
 pub fn hull_of_points(points: impl Iterator<Item = DVec3> + Clone) -> Option<Hull> {
     let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
     for p in points.clone() {

@@ -3,7 +3,7 @@
 //! scene it was traced from ([`SceneProbe`]).
 //!
 //! The retina's grid decides nothing the picture can see sharply. Each picture ray meets the
-//! scene's sheets ([`super::sheets`]) at exact points; between two crossings the ray is inside
+//! scene's sheets (`composite/sheets.rs`) at exact points; between two crossings the ray is inside
 //! the retina's covered region or outside it — from the layer count when the scene allows it
 //! ([`Structure::counted`]), else from one 4D ray between them ([`SceneProbe::covered`]) —
 //! and the cutaway is removed from it exactly. So the coverage stops at the true silhouette
@@ -22,7 +22,7 @@
 //!   for faceted objects, or a denser one ([`SMOOTH_OPACITY`]) for smooth hypersurfaces
 //!   ([`ObjectLook::smooth`]), read by their 4D shading; the crease and occlusion-contour
 //!   sheets the 4D eye sees drawn as thin inked layers, more opaque edge-on; the silhouette
-//!   drawn as a line by the edge overlay ([`Exact::silhouettes`]).
+//!   drawn as a line by the edge overlay (`Exact::silhouettes`).
 //!
 //! Anti-aliasing: every pixel gets one ray through its centre; a pixel whose neighbours differ
 //! from it — in what its ray crossed, or in colour or coverage — gets

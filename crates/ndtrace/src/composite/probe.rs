@@ -1,4 +1,4 @@
-//! What a picture may ask the scene its retina was traced from ([`Detail::Scene`], N = 4): the
+//! What a picture may ask the scene its retina was traced from ([`Detail::Scene`](super::Detail::Scene), N = 4): the
 //! scene's exact structure in the retina, and the 4D ray through any retina point.
 //!
 //! A retina point p is a 4D ray from the eye. A mesh simplex (a tetrahedron) projects, through
