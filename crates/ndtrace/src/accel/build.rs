@@ -662,6 +662,7 @@ impl<const N: usize> Bvh<N> {
                 cell_links: Vec::new(),
                 cell_prepared: Vec::new(),
                 exact,
+                exact_rows: Vec::new(),
             };
         }
         // The cells that pass the checks; the binary tree is built over the other simplices
@@ -748,6 +749,7 @@ impl<const N: usize> Bvh<N> {
             cell_links: tree.cell_links,
             cell_prepared: tree.cell_prepared,
             exact,
+            exact_rows: Vec::new(),
         }
     }
 

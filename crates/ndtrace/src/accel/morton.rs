@@ -274,6 +274,7 @@ impl<const N: usize> Bvh<N> {
             cell_links: Vec::new(),
             cell_prepared: Vec::new(),
             exact: exact.clone(),
+            exact_rows: Vec::new(),
         };
         if count == 0 {
             return empty;
@@ -420,6 +421,7 @@ impl<const N: usize> Bvh<N> {
             cell_links: Vec::new(),
             cell_prepared: Vec::new(),
             exact,
+            exact_rows: Vec::new(),
         }
     }
 }

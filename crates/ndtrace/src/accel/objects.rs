@@ -16,7 +16,7 @@
 
 use super::{
     prefetch_of, simplex_bounds, Bounds, BuildRef, Bvh, ExactSource, FlatCell, Instances, Lane,
-    PreparedSimplex, ToObject, MORTON_MIN,
+    PreparedSimplex, ToObject, EXACT_ROWS_MAX_BYTES, MORTON_MIN,
 };
 use crate::linalg::Vector;
 use crate::mesh::Mesh;
@@ -240,8 +240,13 @@ impl<const N: usize> Built<N> {
     /// `boxes[k]`.
     pub fn finish<M: Meshes<N>>(self, meshes: &Arc<M>, boxes: &[Bounds<N>]) -> Instances<N> {
         let mut trees = self.trees;
+        let exact_rows =
+            trees.iter().map(Bvh::exact_rows_bytes).sum::<usize>() <= EXACT_ROWS_MAX_BYTES;
         for (tree, members) in trees.iter_mut().zip(&self.groups) {
             tree.set_exact(exact_source(meshes, &self.offsets, members, &self.own));
+            if exact_rows {
+                tree.keep_exact_rows();
+            }
         }
         Instances::new(
             trees.into_iter().map(Arc::new).collect(),
@@ -316,6 +321,10 @@ impl<const N: usize> Rebuilt<N> {
         let mut tree = self.tree;
         let offsets = instances.offsets();
         tree.set_exact(exact_source(meshes, offsets, &self.members, &[]));
+        // The same simplices as the frame before: exact rows if its trees kept them.
+        if instances.trees().iter().any(|t| t.has_exact_rows()) {
+            tree.keep_exact_rows();
+        }
         instances.moved_with((maps, boxes), tree, &self.members, self.slots)
     }
 }

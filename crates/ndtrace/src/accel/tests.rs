@@ -76,12 +76,43 @@ pub(super) fn brute<const N: usize>(
     tmax: f64,
     accept: impl Fn(u32) -> bool,
 ) -> Option<Hit<N>> {
+    brute_with(
+        prims,
+        ray,
+        (tmin, tmax),
+        accept,
+        PreparedSimplex::intersect_stored,
+    )
+}
+
+/// [`brute`] with the exact test of every simplex: what a tree that keeps exact rows
+/// ([`Bvh::keep_exact_rows`]) finds.
+pub(super) fn brute_exact<const N: usize>(
+    prims: &[(PreparedSimplex<N>, u32)],
+    ray: &Ray<N>,
+    tmin: f64,
+    tmax: f64,
+    accept: impl Fn(u32) -> bool,
+) -> Option<Hit<N>> {
+    brute_with(prims, ray, (tmin, tmax), accept, PreparedSimplex::intersect)
+}
+
+type RayTest<const N: usize> =
+    fn(&PreparedSimplex<N>, &Ray<N>, f64, f64) -> Option<(f64, [f64; N])>;
+
+fn brute_with<const N: usize>(
+    prims: &[(PreparedSimplex<N>, u32)],
+    ray: &Ray<N>,
+    (tmin, tmax): (f64, f64),
+    accept: impl Fn(u32) -> bool,
+    test: RayTest<N>,
+) -> Option<Hit<N>> {
     let mut best: Option<Hit<N>> = None;
     for (p, id) in prims {
         if !accept(*id) {
             continue;
         }
-        if let Some((t, bary)) = p.intersect_stored(ray, tmin, tmax) {
+        if let Some((t, bary)) = test(p, ray, tmin, tmax) {
             if best.is_none_or(|b| t < b.t || (t == b.t && *id < b.prim)) {
                 best = Some(Hit {
                     t,

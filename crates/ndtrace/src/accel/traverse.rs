@@ -261,23 +261,34 @@ impl<const N: usize> Bvh<N> {
         }
     }
 
-    /// Tests a block, with the AVX2 kernel when `AVX` (only instantiated inside functions
-    /// compiled for AVX2).
+    /// Tests block `b`, with its exact rows when the tree keeps them (see
+    /// [`Bvh::keep_exact_rows`]), else with its rounded rows; with the AVX2 kernels when `AVX`
+    /// (only instantiated inside functions compiled for AVX2).
     #[inline(always)]
     fn block_hit<const AVX: bool>(
         &self,
-        block: &LeafBlock<N>,
+        b: u32,
         ray: &PreparedRay<N>,
         tmin: f64,
         tmax: f64,
     ) -> BlockHits<N> {
         stats::count(1);
+        let block = &self.blocks[b as usize];
+        let exact = self.exact_rows.get(b as usize);
         #[cfg(target_arch = "x86_64")]
         if AVX {
             // SAFETY: `AVX` is only true in code running after an AVX2 check.
-            return unsafe { block.hit_avx2(ray, tmin, tmax) };
+            return unsafe {
+                match exact {
+                    Some(rows) => block.hit_exact_avx2(rows, ray, tmin, tmax),
+                    None => block.hit_avx2(ray, tmin, tmax),
+                }
+            };
         }
-        block.hit(ray, tmin, tmax)
+        match exact {
+            Some(rows) => block.hit_exact_portable(rows, ray, tmin, tmax),
+            None => block.hit(ray, tmin, tmax),
+        }
     }
 
     /// Tests the children of inner node `cur` against the rays of the packet in the bit set
@@ -493,7 +504,7 @@ impl<const N: usize> Bvh<N> {
                     let ray = &packet.pre()[q].prepared;
                     let mut test = |b: u32| {
                         let block = &self.blocks[b as usize];
-                        let hits = self.block_hit::<AVX>(block, ray, tmin, tmax_b[q]);
+                        let hits = self.block_hit::<AVX>(b, ray, tmin, tmax_b[q]);
                         let mut mask = hits.mask | hits.unsure;
                         let best = &mut best[q];
                         while mask != 0 {
@@ -616,7 +627,7 @@ impl<const N: usize> Bvh<N> {
                             return;
                         }
                         let block = &self.blocks[b as usize];
-                        let hits = self.block_hit::<AVX>(block, ray, tmin, tmax[q]);
+                        let hits = self.block_hit::<AVX>(b, ray, tmin, tmax[q]);
                         let counts = |l: usize| {
                             let id = block.ids[l];
                             accept(id) && !skip.contains(&id)

@@ -143,6 +143,15 @@ pub(super) struct BlockHits<const N: usize> {
 }
 
 impl<const N: usize> BlockHits<N> {
+    /// No lane hit nor unsure, every value zero: what a block test starts from.
+    pub(super) const NONE: Self = BlockHits {
+        mask: 0,
+        unsure: 0,
+        t: [0.0; BLOCK_WIDTH],
+        den: [0.0; BLOCK_WIDTH],
+        u: [[0.0; BLOCK_WIDTH]; N],
+    };
+
     /// Barycentric coordinates of lane l, as [`PreparedSimplex::intersect`](super::PreparedSimplex::intersect) computes them.
     #[inline(always)]
     pub(super) fn bary(&self, l: usize) -> [f64; N] {
@@ -256,7 +265,27 @@ pub struct Bvh<const N: usize> {
     pub(super) cell_prepared: Vec<super::PreparedSimplex<N>>,
     /// The exact simplices of the unsure lanes.
     pub(super) exact: ExactSource<N>,
+    /// For a tree small enough to live in a core's caches ([`Bvh::keep_exact_rows`]): per
+    /// block, its lanes' rows `n̂, r_k` exact, `exact_rows[b][k][i][lane]`, which its blocks are
+    /// tested with instead of their rounded rows; empty otherwise.
+    pub(super) exact_rows: Vec<ExactRows<N>>,
 }
+
+/// The exact rows `n̂, r_k` of a block's lanes, `[k][i][lane]` ([`Bvh::keep_exact_rows`]).
+pub(super) type ExactRows<const N: usize> = [[[f64; BLOCK_WIDTH]; N]; N];
+
+/// The most bytes of exact rows the trees of a scene keep beside their blocks
+/// ([`Bvh::keep_exact_rows`]): 1 MiB, 8,192 simplices in 4D, 14,563 in 3D.
+///
+/// The rows in f32 (1b in the module docs of [`crate::accel`]) save memory bandwidth where a
+/// tree does not fit in a core's caches, and cost compute everywhere: the certified bound on
+/// their rounding more than doubles the instructions of a block test (about 250 against 110
+/// in 4D). A tree whose exact rows take at most 1 MiB (with its blocks and nodes, about a
+/// quarter of the 2–4 MiB L2 cache of a current core, the bench machine's is 4 MiB) is
+/// compute-bound, so it is tested with exact rows, which need no bound and leave no lane
+/// unsure. Its memory grows by `8·N²` bytes per simplex (128 in 4D), 1 MiB at most per
+/// scene; larger scenes are unchanged (≤ 150 B/simplex in 4D).
+pub const EXACT_ROWS_MAX_BYTES: usize = 1 << 20;
 
 /// A binary node of the build: f32 bounds rounded outward and either two children (the left
 /// one next, `first` the right one) or a leaf range `first .. first + count` (count > 0).
@@ -294,6 +323,43 @@ impl<const N: usize> Bvh<N> {
         self.exact = exact;
     }
 
+    /// The bytes its exact rows take, kept or not ([`Bvh::keep_exact_rows`]).
+    pub fn exact_rows_bytes(&self) -> usize {
+        self.blocks.len() * size_of::<ExactRows<N>>()
+    }
+
+    /// Whether it keeps its exact rows.
+    pub fn has_exact_rows(&self) -> bool {
+        !self.exact_rows.is_empty()
+    }
+
+    /// Keeps, beside the blocks, every lane's exact rows (prepared again by the tree's
+    /// [`ExactSource`], which must be set): the blocks are then tested exactly, with the
+    /// arithmetic of the exact test (`PreparedSimplex::hit`) and no unsure lane, and their hits
+    /// carry the exact t and coordinates. A scene keeps them when all its trees' take at most
+    /// [`EXACT_ROWS_MAX_BYTES`].
+    pub fn keep_exact_rows(&mut self) {
+        use rayon::prelude::*;
+        let exact = &self.exact;
+        self.exact_rows = self
+            .blocks
+            .par_iter()
+            .map(|block| {
+                let mut rows = [[[0.0; BLOCK_WIDTH]; N]; N];
+                for (l, &id) in block.ids[..block.count()].iter().enumerate() {
+                    let p = exact.prepare(id);
+                    debug_assert_eq!(p.x0.map(f64::to_bits), block.x0.map(|x| x[l].to_bits()));
+                    for (k, row) in p.m.iter().enumerate() {
+                        for (i, &v) in row.iter().enumerate() {
+                            rows[k][i][l] = v;
+                        }
+                    }
+                }
+                rows
+            })
+            .collect();
+    }
+
     /// Number of simplices.
     pub fn len(&self) -> usize {
         self.len
@@ -322,6 +388,7 @@ impl<const N: usize> Bvh<N> {
             + self.cells.len() * std::mem::size_of::<Cell>()
             + self.cell_links.len()
                 * (std::mem::size_of::<[u32; N]>() + size_of::<super::PreparedSimplex<N>>())
+            + self.exact_rows.len() * size_of::<ExactRows<N>>()
     }
 
     /// Number of flat cells (each holding the simplices of one flat facet, see `cell.rs`).

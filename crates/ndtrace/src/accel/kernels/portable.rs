@@ -2,11 +2,13 @@
 //! kernels of other targets. Compiled on every target.
 
 use super::super::packet::{Frustum, TraversalRay};
+use super::super::simplex::dot_pairwise;
 use super::super::simplex::PreparedRay;
 use super::super::tree::{
-    BlockHits, LeafBlock, WideNode, BLOCK_WIDTH, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
+    BlockHits, ExactRows, LeafBlock, WideNode, EMPTY_SLOT, LEAF_TAG, NODE_WIDTH,
 };
 use super::super::PreparedSimplex;
+use crate::linalg::sub;
 
 impl<const N: usize> TraversalRay<N> {
     /// Portable version of the x86_64 slab test `slab_sse` (same arithmetic, same results).
@@ -93,13 +95,7 @@ impl<const N: usize> LeafBlock<N> {
         tmin: f64,
         tmax: f64,
     ) -> BlockHits<N> {
-        let mut out = BlockHits {
-            mask: 0,
-            unsure: 0,
-            t: [0.0; BLOCK_WIDTH],
-            den: [0.0; BLOCK_WIDTH],
-            u: [[0.0; BLOCK_WIDTH]; N],
-        };
+        let mut out = BlockHits::NONE;
         for l in 0..self.count() {
             let m = std::array::from_fn(|k| std::array::from_fn(|i| f64::from(self.m[k][i][l])));
             let x0 = std::array::from_fn(|i| self.x0[i][l]);
@@ -111,6 +107,43 @@ impl<const N: usize> LeafBlock<N> {
             }
             out.mask |= u32::from(r.hit) << l;
             out.unsure |= u32::from(r.unsure) << l;
+        }
+        out
+    }
+}
+
+impl<const N: usize> LeafBlock<N> {
+    /// Portable version of the x86_64 exact block test `hit_exact_avx2` (same arithmetic, same
+    /// results): the exact test [`PreparedSimplex::hit`] lane by lane, with the lanes' exact
+    /// rows `rows` instead of the block's rounded ones; no lane is unsure. t and `n̂·d` are
+    /// those of every lane, `u` those of the lanes hit.
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    #[inline(always)]
+    pub(in crate::accel) fn hit_exact_portable(
+        &self,
+        rows: &ExactRows<N>,
+        ray: &PreparedRay<N>,
+        tmin: f64,
+        tmax: f64,
+    ) -> BlockHits<N> {
+        let mut out = BlockHits::NONE;
+        for l in 0..self.count() {
+            let m: [[f64; N]; N] = std::array::from_fn(|k| std::array::from_fn(|i| rows[k][i][l]));
+            let x0 = std::array::from_fn(|i| self.x0[i][l]);
+            // The values `PreparedSimplex::hit` computes, kept for the traversal.
+            let den = dot_pairwise(&m[0], &ray.d);
+            let p = sub(&x0, &ray.o);
+            let num = dot_pairwise(&m[0], &p);
+            out.t[l] = num / den;
+            out.den[l] = den;
+            if let Some((t, _)) = (PreparedSimplex { m, x0 }).hit(ray, tmin, tmax) {
+                debug_assert_eq!(t.to_bits(), out.t[l].to_bits());
+                let w: [f64; N] = std::array::from_fn(|i| num * ray.d[i] - den * p[i]);
+                for k in 1..N {
+                    out.u[k][l] = dot_pairwise(&m[k], &w);
+                }
+                out.mask |= 1 << l;
+            }
         }
         out
     }

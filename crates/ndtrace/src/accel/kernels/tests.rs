@@ -80,21 +80,29 @@ fn accel_slab_test_treats_boxes_as_closed() {
 }
 
 /// Every SIMD block kernel gives, lane by lane, the bits of `PreparedSimplex::intersect`.
+/// `count` random simplices near one point (their points, prepared, and the tree of the one
+/// block they fill), or `None` when one is degenerate.
+type RandomBlock<const N: usize> = (Vec<[[f64; N]; N]>, Vec<PreparedSimplex<N>>, Bvh<N>);
+fn random_block<const N: usize>(r: &mut TestRng, count: usize) -> Option<RandomBlock<N>> {
+    let c = random_vector::<N>(r, 1.0);
+    let pts: Vec<[[f64; N]; N]> = (0..count).map(|_| random_simplex(r, &c, 1.0)).collect();
+    let prims: Vec<PreparedSimplex<N>> = pts.iter().filter_map(PreparedSimplex::new).collect();
+    if prims.len() != count {
+        return None;
+    }
+    let ids: Vec<u32> = (0..count as u32).collect();
+    let bounds = pts.iter().map(|p| simplex_bounds(p)).collect();
+    let bvh = Bvh::build(prims.clone(), ids, bounds);
+    Some((pts, prims, bvh))
+}
+
 fn block_kernels_agree<const N: usize>() {
     let mut r = rng(5000 + N as u64);
     for case in 0..400 {
         let count = 1 + case % BLOCK_WIDTH;
-        let c = random_vector::<N>(&mut r, 1.0);
-        let pts: Vec<[[f64; N]; N]> = (0..count)
-            .map(|_| random_simplex(&mut r, &c, 1.0))
-            .collect();
-        let prims: Vec<PreparedSimplex<N>> = pts.iter().filter_map(PreparedSimplex::new).collect();
-        if prims.len() != count {
+        let Some((pts, prims, bvh)) = random_block::<N>(&mut r, count) else {
             continue;
-        }
-        let ids: Vec<u32> = (0..count as u32).collect();
-        let bounds = pts.iter().map(|p| simplex_bounds(p)).collect();
-        let bvh = Bvh::build(prims.clone(), ids, bounds);
+        };
         assert_eq!(bvh.blocks.len(), 1);
         let block = &bvh.blocks[0];
         for _ in 0..20 {
@@ -344,17 +352,9 @@ fn block_kernels_agree_with_portable<const N: usize>() {
     let (mut hit, mut missed, mut early) = (0, 0, 0);
     for case in 0..500 {
         let count = 1 + case % BLOCK_WIDTH;
-        let c = random_vector::<N>(&mut r, 1.0);
-        let pts: Vec<[[f64; N]; N]> = (0..count)
-            .map(|_| random_simplex(&mut r, &c, 1.0))
-            .collect();
-        let prims: Vec<PreparedSimplex<N>> = pts.iter().filter_map(PreparedSimplex::new).collect();
-        if prims.len() != count {
+        let Some((pts, _, bvh)) = random_block::<N>(&mut r, count) else {
             continue;
-        }
-        let ids: Vec<u32> = (0..count as u32).collect();
-        let bounds = pts.iter().map(|p| simplex_bounds(p)).collect();
-        let bvh = Bvh::build(prims, ids, bounds);
+        };
         let block = &bvh.blocks[0];
         for k in 0..40 {
             let origin = random_vector::<N>(&mut r, 3.0);
@@ -421,6 +421,74 @@ fn block_kernels_agree_with_portable<const N: usize>() {
 #[test]
 fn accel_block_kernels_match_the_portable_one_bit_for_bit() {
     for_each_dim!(block_kernels_agree_with_portable);
+}
+
+/// The exact block kernels (a tree's exact rows, [`Bvh::keep_exact_rows`]): the AVX2 one gives
+/// the portable one's bits, and both decide every lane as the exact test of its simplex does,
+/// with its t and coordinates bit for bit, and leave no lane unsure.
+fn exact_block_kernels_agree<const N: usize>() {
+    let mut r = rng(7100 + N as u64);
+    let (mut hit, mut missed) = (0, 0);
+    for case in 0..400 {
+        let count = 1 + case % BLOCK_WIDTH;
+        let Some((pts, prims, mut bvh)) = random_block::<N>(&mut r, count) else {
+            continue;
+        };
+        bvh.keep_exact_rows();
+        let (block, rows) = (&bvh.blocks[0], &bvh.exact_rows[0]);
+        for k in 0..30 {
+            let origin = random_vector::<N>(&mut r, 3.0);
+            let pts_l = &pts[r.random_range(0..count)];
+            let aim = crate::linalg::sub(&plane_point(&mut r, pts_l, -0.2, 1.0), &origin);
+            let dir = match k % 5 {
+                0 | 1 => aim,
+                2 => random_vector::<N>(&mut r, 1.0),
+                // Parallel to the simplex's hyperplane, and no direction at all.
+                3 => crate::linalg::sub(&pts_l[1], &pts_l[0]),
+                _ => [0.0; N],
+            };
+            let (tmin, tmax) = [(0.0, f64::INFINITY), (f64::NEG_INFINITY, 0.0), (0.5, 1.5)][k % 3];
+            let ray = Ray { origin, dir };
+            let pre = PreparedRay::new(&ray);
+            let want = block.hit_exact_portable(rows, &pre, tmin, tmax);
+            assert_eq!(want.unsure, 0);
+            for l in 0..count {
+                let id = block.ids[l] as usize;
+                let exact = prims[id].intersect(&ray, tmin, tmax);
+                let got = (want.mask >> l & 1 == 1).then(|| (want.t[l], want.bary(l)));
+                let bits =
+                    |h: Option<(f64, [f64; N])>| h.map(|(t, b)| (t.to_bits(), b.map(f64::to_bits)));
+                assert_eq!(bits(got), bits(exact), "N={N} case {case} lane {l}");
+            }
+            assert_eq!(want.mask >> count, 0, "N={N}: an unused lane hit");
+            hit += want.mask.count_ones();
+            missed += count as u32 - want.mask.count_ones();
+            #[cfg(target_arch = "x86_64")]
+            if avx2() {
+                // SAFETY: AVX2 is available.
+                let got = unsafe { block.hit_exact_avx2(rows, &pre, tmin, tmax) };
+                assert_eq!((got.mask, got.unsure), (want.mask, 0), "N={N} case {case}");
+                for l in 0..count {
+                    let tb = |h: &BlockHits<N>| (h.t[l].to_bits(), h.den[l].to_bits());
+                    assert_eq!(tb(&got), tb(&want), "N={N} case {case}: t, n·d");
+                    if want.mask >> l & 1 == 1 {
+                        for j in 1..N {
+                            assert_eq!(got.u[j][l].to_bits(), want.u[j][l].to_bits());
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        hit > 300 && missed > 300,
+        "N={N}: {hit} lanes hit, {missed} missed"
+    );
+}
+
+#[test]
+fn accel_exact_block_kernels_match_the_exact_test_bit_for_bit() {
+    for_each_dim!(exact_block_kernels_agree);
 }
 
 #[test]

@@ -6,7 +6,7 @@
 use super::super::packet::{Frustum, Packet, TraversalRay};
 use super::super::simplex::{PreparedRay, F64_ROUNDING, ROUNDING};
 use super::super::stats;
-use super::super::tree::{BlockHits, LeafBlock, WideNode, BLOCK_WIDTH, NODE_WIDTH};
+use super::super::tree::{BlockHits, ExactRows, LeafBlock, WideNode, BLOCK_WIDTH, NODE_WIDTH};
 use crate::accel::BARY_SLACK;
 use std::arch::x86_64::*;
 
@@ -69,7 +69,81 @@ impl<const N: usize> TraversalRay<N> {
     }
 }
 
+/// The pairwise sum of [`sum_pairwise`](super::super::simplex::sum_pairwise), 4 lanes at a time.
+#[inline(always)]
+fn sum4<const N: usize>(mut v: [__m256d; N]) -> __m256d {
+    let mut m = N;
+    while m > 1 {
+        let half = m.div_ceil(2);
+        for j in 0..m / 2 {
+            // SAFETY: only reached from the block kernels, whose callers guarantee AVX2.
+            v[j] = unsafe { _mm256_add_pd(v[j], v[j + half]) };
+        }
+        m = half;
+    }
+    v[0]
+}
+
 impl<const N: usize> LeafBlock<N> {
+    /// The exact block test with the 4 lanes in one AVX register: per lane, exactly the
+    /// arithmetic of [`PreparedSimplex::hit`](crate::accel::PreparedSimplex) (the same
+    /// operations in the same order, no FMA, hence the same bits) on the lanes' exact rows
+    /// `rows` ([`Bvh::keep_exact_rows`](crate::accel::Bvh::keep_exact_rows)); no lane is unsure.
+    /// Returns early, before the inside test, when no lane has t in range.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(in crate::accel) unsafe fn hit_exact_avx2(
+        &self,
+        rows: &ExactRows<N>,
+        ray: &PreparedRay<N>,
+        tmin: f64,
+        tmax: f64,
+    ) -> BlockHits<N> {
+        let ld = |a: &[f64; BLOCK_WIDTH]| _mm256_loadu_pd(a.as_ptr());
+        let splat = _mm256_set1_pd;
+        let mut out = BlockHits::NONE;
+        let d: [__m256d; N] = std::array::from_fn(|i| splat(ray.d[i]));
+        let n: [__m256d; N] = std::array::from_fn(|i| ld(&rows[0][i]));
+        let den = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(n[i], d[i])));
+        let p: [__m256d; N] =
+            std::array::from_fn(|i| _mm256_sub_pd(ld(&self.x0[i]), splat(ray.o[i])));
+        let num = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(n[i], p[i])));
+        let t = _mm256_div_pd(num, den);
+        let crossing = _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_mul_pd(den, den), splat(ray.par2));
+        let above = _mm256_cmp_pd::<_CMP_GT_OQ>(t, splat(tmin));
+        let below = _mm256_cmp_pd::<_CMP_LT_OQ>(t, splat(tmax));
+        let mut ok = _mm256_and_pd(crossing, _mm256_and_pd(above, below));
+        _mm256_storeu_pd(out.t.as_mut_ptr(), t);
+        _mm256_storeu_pd(out.den.as_mut_ptr(), den);
+        if _mm256_movemask_pd(ok) as u32 & self.used() == 0 {
+            return out;
+        }
+        let sign = splat(-0.0);
+        let w: [__m256d; N] = std::array::from_fn(|i| {
+            _mm256_sub_pd(_mm256_mul_pd(num, d[i]), _mm256_mul_pd(den, p[i]))
+        });
+        let ad = _mm256_andnot_pd(sign, den);
+        let thr = _mm256_mul_pd(splat(-BARY_SLACK), ad);
+        let flip = _mm256_and_pd(sign, den);
+        let mut sum = _mm256_setzero_pd();
+        for k in 1..N {
+            let u = sum4::<N>(std::array::from_fn(|i| {
+                _mm256_mul_pd(ld(&rows[k][i]), w[i])
+            }));
+            _mm256_storeu_pd(out.u[k].as_mut_ptr(), u);
+            // u_k·sign(n̂·d), exactly (a sign flip).
+            let v = _mm256_xor_pd(u, flip);
+            ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GE_OQ>(v, thr));
+            sum = _mm256_add_pd(sum, v);
+        }
+        ok = _mm256_and_pd(ok, _mm256_cmp_pd::<_CMP_GE_OQ>(_mm256_sub_pd(ad, sum), thr));
+        out.mask = _mm256_movemask_pd(ok) as u32 & self.used();
+        out
+    }
+
     /// The block test with the 4 lanes in one AVX register: per lane, exactly the arithmetic
     /// of [`PreparedSimplex::hit_rounded`](crate::accel::PreparedSimplex) (the same operations
     /// in the same order, no FMA, hence the same bits) on the rows widened from f32. Returns
@@ -85,33 +159,13 @@ impl<const N: usize> LeafBlock<N> {
         tmin: f64,
         tmax: f64,
     ) -> BlockHits<N> {
-        use std::arch::x86_64::*;
-        #[inline(always)]
-        fn sum4<const N: usize>(mut v: [__m256d; N]) -> __m256d {
-            let mut m = N;
-            while m > 1 {
-                let half = m.div_ceil(2);
-                for j in 0..m / 2 {
-                    // SAFETY: only reached from `hit_avx2`, whose caller guarantees AVX2.
-                    v[j] = unsafe { _mm256_add_pd(v[j], v[j + half]) };
-                }
-                m = half;
-            }
-            v[0]
-        }
         // SAFETY (closures): only called here, where AVX2 is guaranteed; the pointers are
         // `[f32; 4]` and `[f64; 4]` read whole (unaligned loads).
         let row = |a: &[f32; BLOCK_WIDTH]| _mm256_cvtps_pd(_mm_loadu_ps(a.as_ptr()));
         let sign = _mm256_set1_pd(-0.0);
         let abs = |v: __m256d| _mm256_andnot_pd(sign, v);
         let splat = _mm256_set1_pd;
-        let mut out = BlockHits {
-            mask: 0,
-            unsure: 0,
-            t: [0.0; BLOCK_WIDTH],
-            den: [0.0; BLOCK_WIDTH],
-            u: [[0.0; BLOCK_WIDTH]; N],
-        };
+        let mut out = BlockHits::NONE;
         let d: [__m256d; N] = std::array::from_fn(|i| splat(ray.d[i]));
         let n: [__m256d; N] = std::array::from_fn(|i| row(&self.m[0][i]));
         let den = sum4::<N>(std::array::from_fn(|i| _mm256_mul_pd(n[i], d[i])));

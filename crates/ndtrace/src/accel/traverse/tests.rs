@@ -81,6 +81,90 @@ fn accel_bvh_closest_and_any_hit_equal_brute_force() {
     for_each_dim!(bvh_agrees_with_brute_force);
 }
 
+/// A tree that keeps exact rows ([`Bvh::keep_exact_rows`]) finds the hits of the exact test of
+/// every simplex, bit for bit, one ray at a time and in packets, on the AVX2 and the portable
+/// paths; and its memory counts the rows.
+fn exact_rows_agree_with_brute_force<const N: usize>() {
+    let mut r = rng(2700 + N as u64);
+    let s = soup::<N>(&mut r, 300);
+    let prims = prepare(&s);
+    let mut bvh = build_soup(&s, PAR_MIN);
+    assert!(!bvh.has_exact_rows());
+    let rounded_bytes = bvh.memory_bytes();
+    bvh.keep_exact_rows();
+    assert!(bvh.has_exact_rows());
+    assert_eq!(bvh.exact_rows.len(), bvh.blocks.len());
+    assert_eq!(bvh.memory_bytes() - rounded_bytes, bvh.exact_rows_bytes());
+    assert_eq!(
+        bvh.exact_rows_bytes(),
+        bvh.blocks.len() * size_of::<[[[f64; BLOCK_WIDTH]; N]; N]>()
+    );
+    let (mut hits, mut differ) = (0, 0);
+    for case in 0..300 {
+        let count = 1 + case % 11;
+        let rays = packet_rays(&mut r, &s, case % 4, count);
+        let (tmin, tmax) = [(0.0, f64::INFINITY), (0.2, 1.0)][case % 2];
+        let f = |id: u32| !id.is_multiple_of(5);
+        let want: Vec<_> = rays
+            .iter()
+            .map(|ray| brute_exact(&prims, ray, tmin, tmax, f))
+            .collect();
+        for (ray, w) in rays.iter().zip(&want) {
+            assert_eq!(bvh.closest_hit(ray, tmin, tmax, f), *w, "N={N} case {case}");
+            let mut portable = [None];
+            bvh.closest_hits_impl::<false, 1>(
+                std::slice::from_ref(ray),
+                tmin,
+                tmax,
+                &f,
+                &mut portable,
+            );
+            assert_eq!(portable[0], *w, "N={N} case {case}: portable path");
+            // The rounded rows' hits differ in the last bits of t (or not at all).
+            let rounded = brute(&prims, ray, tmin, tmax, f);
+            assert_eq!(rounded.map(|h| h.prim), w.map(|h| h.prim));
+            differ += (rounded.map(|h| h.t) != w.map(|h| h.t)) as usize;
+        }
+        let mut got = vec![None; count];
+        bvh.closest_hits(&rays, tmin, tmax, f, &mut got);
+        assert_eq!(got, want, "N={N} case {case}: packets");
+        hits += want.iter().filter(|h| h.is_some()).count();
+        let tmaxes: Vec<f64> = (0..count).map(|_| r.random_range(0.1..2.0)).collect();
+        let want: Vec<bool> = rays
+            .iter()
+            .zip(&tmaxes)
+            .map(|(ray, &t)| brute_exact(&prims, ray, tmin, t, f).is_some())
+            .collect();
+        let mut got = vec![false; count];
+        bvh.any_hits(&rays, tmin, &tmaxes, f, 0..0, &mut got);
+        assert_eq!(got, want, "N={N} case {case}: any_hits");
+        let mut portable = vec![false; count];
+        bvh.any_hits_impl::<false, PACKET>(
+            &rays[..count.min(PACKET)],
+            tmin,
+            &tmaxes[..count.min(PACKET)],
+            &f,
+            &(0..0),
+            &mut portable[..count.min(PACKET)],
+        );
+        assert_eq!(
+            portable[..count.min(PACKET)],
+            want[..count.min(PACKET)],
+            "N={N}: portable any_hits"
+        );
+    }
+    assert!(hits > 40, "N={N}: only {hits} hits");
+    assert!(
+        differ > 0,
+        "N={N}: the exact rows changed no t (the test tests nothing)"
+    );
+}
+
+#[test]
+fn accel_trees_with_exact_rows_equal_the_exact_brute_force() {
+    for_each_dim!(exact_rows_agree_with_brute_force);
+}
+
 fn packets_agree_with_brute_force<const N: usize>() {
     let mut r = rng(2500 + N as u64);
     let s = soup::<N>(&mut r, 300);
@@ -390,43 +474,47 @@ fn closed_mesh_is_watertight<const N: usize>() {
         };
         let simplices: Vec<[[f64; N]; N]> = cells.iter().map(|s| s.map(|v| map(&v, 1.0))).collect();
         let ids: Vec<u32> = (0..simplices.len() as u32).collect();
-        let bvh = Bvh::from_simplices(&simplices, &ids);
-        assert_eq!(bvh.len(), simplices.len());
-        let center = shift;
-        for g in &targets {
-            let target = map(g, 2.0);
-            // From the inside: the one crossing is at the target, t = 1.
-            let ray = Ray {
-                origin: center,
-                dir: crate::linalg::sub(&target, &center),
-            };
-            let h = bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true);
-            assert!(
-                // (t within the rounding of the blocks' f32 rows, ~10⁻⁷.)
-                h.is_some_and(|h| (h.t - 1.0).abs() < 1e-6),
-                "N={N} shape {shape}: from inside to {g:?}: {h:?}"
-            );
-            // From outside, along a random direction and (axis-aligned cube) along an axis:
-            // the first crossing is at or before the target.
-            let mut origins = vec![add_scaled(&target, 4.0, &random_unit::<N>(&mut r))];
-            if shape == 0 {
-                let axis = r.random_range(0..N);
-                let mut o = target;
-                o[axis] += if target[axis] >= 0.0 { 3.0 } else { -3.0 };
-                origins.push(o);
-            }
-            for origin in origins {
+        let rounded = Bvh::from_simplices(&simplices, &ids);
+        let mut exact = rounded.clone();
+        exact.keep_exact_rows();
+        for bvh in [&rounded, &exact] {
+            assert_eq!(bvh.len(), simplices.len());
+            let center = shift;
+            for g in &targets {
+                let target = map(g, 2.0);
+                // From the inside: the one crossing is at the target, t = 1.
                 let ray = Ray {
-                    origin,
-                    dir: crate::linalg::sub(&target, &origin),
+                    origin: center,
+                    dir: crate::linalg::sub(&target, &center),
                 };
                 let h = bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true);
-                let ok = h.is_some_and(|h| h.t <= 1.0 + 1e-6);
                 assert!(
-                    ok,
-                    "N={N} shape {shape}: outside {origin:?} to {g:?}: {h:?}"
+                    // (t within the rounding of the blocks' f32 rows, ~10⁻⁷.)
+                    h.is_some_and(|h| (h.t - 1.0).abs() < 1e-6),
+                    "N={N} shape {shape}: from inside to {g:?}: {h:?}"
                 );
-                assert!(bvh.any_hit(&ray, 0.0, f64::INFINITY, |_| true, 0..0));
+                // From outside, along a random direction and (axis-aligned cube) along an axis:
+                // the first crossing is at or before the target.
+                let mut origins = vec![add_scaled(&target, 4.0, &random_unit::<N>(&mut r))];
+                if shape == 0 {
+                    let axis = r.random_range(0..N);
+                    let mut o = target;
+                    o[axis] += if target[axis] >= 0.0 { 3.0 } else { -3.0 };
+                    origins.push(o);
+                }
+                for origin in origins {
+                    let ray = Ray {
+                        origin,
+                        dir: crate::linalg::sub(&target, &origin),
+                    };
+                    let h = bvh.closest_hit(&ray, 0.0, f64::INFINITY, |_| true);
+                    let ok = h.is_some_and(|h| h.t <= 1.0 + 1e-6);
+                    assert!(
+                        ok,
+                        "N={N} shape {shape}: outside {origin:?} to {g:?}: {h:?}"
+                    );
+                    assert!(bvh.any_hit(&ray, 0.0, f64::INFINITY, |_| true, 0..0));
+                }
             }
         }
     }
