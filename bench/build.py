@@ -4,7 +4,10 @@ For each mesh, in a fresh subprocess so that its peak memory is its own, prints
 
 * ``load+build s``: ``ndtrace.Scene(N).add_object("mesh", vertices=v, simplices=s)`` and
   ``.compiled()`` (handing the arrays over, validation, orientation check, prepared simplices,
-  BVH), median of ``--repeat`` runs;
+  BVH), median of ``--repeat`` runs; with ``--via load_dict``, ``ndtrace.load_dict`` of the same
+  scene as a dict holding the numpy arrays instead; with ``--light``, the scene has a
+  directional light and shadows (whose convexity certificates are found by the first trace,
+  not by the build);
 * ``embree s`` (3D meshes, when ``embreex`` is installed): Embree's BVH commit of the same
   triangles in the same process (``EmbreeScene`` + ``TriangleMesh``, committed by its first
   ray query), median of as many runs; and the ratio of the two;
@@ -13,15 +16,16 @@ For each mesh, in a fresh subprocess so that its peak memory is its own, prints
   mesh of the same dimension, so that what any first build costs once (the thread pool, the
   extension's code paged in: about 10 MB) is not counted per simplex;
 * ``BVH B/simplex``: the built BVH's own memory (``bvh_stats``);
-* ``trace s``: one trace of a small retina after the build (it must not depend on the scene's
-  size beyond tracing).
+* ``trace s``: the first trace of a small retina after each build, median (it must not depend
+  on the scene's size beyond tracing; with ``--light`` it finds the convexity certificate).
 
 Meshes: the icospheres ico6 (81,920 triangles) and ico8 (1,310,720) of ``bench/trace.py``; the
 3-sphere of 1,572,864 tetrahedra (the tesseract's boundary, each cubic cell cut into 32³ cubes
 of 6 tetrahedra, projected onto S³); a 128³ elevation map (12.3 M tetrahedra) as mesh arrays
 (``ndtrace.mesh.elevation_map``), with ``--big``.
 
-Usage:  python bench/build.py [--only NAME ...] [--repeat 3] [--big]
+Usage:  python bench/build.py [--only NAME ...] [--repeat 3] [--big] [--light]
+                              [--via builder|load_dict]
 """
 
 from __future__ import annotations
@@ -96,11 +100,31 @@ def camera(dim: int) -> dict:
                 fov=45, resolution=16)
 
 
+LIGHT = dict(type="directional", direction=[0.3, 0.5, 0.8])
+
+
+def build(dim: int, obj: dict, via: str, light: bool):
+    """The scene of the object `obj` (``add_object``'s keys, with ``shape``) built through the
+    builder or through ``load_dict``, with a directional light and shadows when `light`: (the
+    scene, its compiled form)."""
+    import ndtrace
+
+    if via == "load_dict":
+        d = dict(dim=dim, camera=camera(dim), objects=[obj], render=dict(shadows=True),
+                 lights=[LIGHT] if light else [])
+        scene = ndtrace.load_dict(d)
+    else:
+        scene = ndtrace.Scene(dim).set_camera(**camera(dim)).add_object(**obj)
+        if light:
+            scene.add_light(**LIGHT).set_render(shadows=True)
+    return scene, scene.compiled()
+
+
 def _peak() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024.0
 
 
-def run_one(name: str, repeat: int) -> dict:
+def run_one(name: str, repeat: int, via: str, light: bool) -> dict:
     import ndtrace
 
     v, s = mesh(name)
@@ -126,16 +150,14 @@ def run_one(name: str, repeat: int) -> dict:
             out["embree_s"] = statistics.median(times)
             del v32, s32
     # One tiny build first: the costs of a process's first build are not the mesh's.
-    tiny = ndtrace.Scene(dim).set_camera(**camera(dim)).add_object("simplex")
-    tiny.compiled()
+    tiny, _ = build(dim, dict(shape="simplex"), via, light)
     ndtrace.trace(tiny)
     del tiny
     base = _peak()
-    times = []
+    times, traces = [], []
     for _ in range(repeat):
         t = time.perf_counter()
-        scene = ndtrace.Scene(dim).set_camera(**camera(dim)).add_object("mesh", vertices=v, simplices=s)
-        compiled = scene.compiled()
+        scene, compiled = build(dim, dict(shape="mesh", vertices=v, simplices=s), via, light)
         times.append(time.perf_counter() - t)
         if len(times) == 1:
             out["peak_bytes_per_simplex"] = (_peak() - base) / len(s)
@@ -143,9 +165,10 @@ def run_one(name: str, repeat: int) -> dict:
         out["bvh_bytes_per_simplex"] = bvh_bytes / max(prims, 1)
         t = time.perf_counter()
         ndtrace.trace(scene)
-        out["trace_s"] = time.perf_counter() - t
+        traces.append(time.perf_counter() - t)
         del scene, compiled
     out["build_s"] = statistics.median(times)
+    out["trace_s"] = statistics.median(traces)
     return out
 
 
@@ -154,19 +177,25 @@ def main() -> None:
     ap.add_argument("--only", nargs="*")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--big", action="store_true", help="also the 128³ elevation map (12.3 M simplices)")
+    ap.add_argument("--light", action="store_true",
+                    help="a directional light with shadows (the first trace finds the certificate)")
+    ap.add_argument("--via", choices=["builder", "load_dict"], default="builder",
+                    help="build through ndtrace.Scene (default) or ndtrace.load_dict")
     ap.add_argument("--one", help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.one:
-        print(json.dumps(run_one(a.one, a.repeat)))
+        print(json.dumps(run_one(a.one, a.repeat, a.via, a.light)))
         return
     names = a.only or ["ico6", "ico8", "sphere4"] + (["elevation128"] if a.big else [])
-    print(f"{'mesh':<13} {'N':>2} {'simplices':>10} {'load+build s':>12} {'embree s':>9} {'ratio':>6} "
-          f"{'peak B/simplex':>14} {'BVH B/simplex':>13} {'trace s':>8}")
+    print(f"{'mesh':<13} {'N':>2} {'simplices':>10} {'via':>9} {'light':>5} {'load+build s':>12} "
+          f"{'embree s':>9} {'ratio':>6} {'peak B/simplex':>14} {'BVH B/simplex':>13} {'trace s':>8}")
     for name in names:
-        cmd = [sys.executable, __file__, "--one", name, "--repeat", str(a.repeat)]
+        cmd = [sys.executable, __file__, "--one", name, "--repeat", str(a.repeat), "--via", a.via]
+        cmd += ["--light"] if a.light else []
         r = json.loads(subprocess.run(cmd, check=True, capture_output=True, text=True).stdout)
         e = r.get("embree_s")
-        print(f"{r['mesh']:<13} {r['dim']:>2} {r['simplices']:>10} {r['build_s']:>12.3f} "
+        print(f"{r['mesh']:<13} {r['dim']:>2} {r['simplices']:>10} {a.via:>9} "
+              f"{'yes' if a.light else 'no':>5} {r['build_s']:>12.3f} "
               f"{'' if e is None else format(e, '.3f'):>9} "
               f"{'' if e is None else format(r['build_s'] / e, '.2f'):>6} "
               f"{r['peak_bytes_per_simplex']:>14.0f} {r['bvh_bytes_per_simplex']:>13.0f} "

@@ -37,10 +37,11 @@
 //! ridge is convex at every point (the links of its lower faces are locally convex, hence convex,
 //! spherical polytopes), and a closed connected locally convex set is convex (Tietze–Nakajima).
 
-use crate::geometry::{barycentric, generalized_cross, Hyperplane};
+use crate::geometry::{barycentric, generalized_cross, hyperplane, Hyperplane};
 use crate::linalg::{add, dot, norm, scale, sub, Vector};
 use crate::mesh::{orientation::matched_ridges, Mesh};
 use rayon::prelude::*;
+use std::sync::{Arc, OnceLock};
 
 /// The interior point must lie at least `MARGIN`·D inside every simplex's hyperplane.
 pub const MARGIN: f64 = 1e-9;
@@ -184,6 +185,142 @@ pub fn convex_side<const N: usize>(
         }
     }
     None
+}
+
+/// An object's convexity certificate ([`convex_side`]) as its scene holds it: found the first
+/// time something needs it (a trace that casts shadow rays, a picture's probe), not by the
+/// build: finding it costs about as much as building the object's tree (it sorts the
+/// ridges), and a scene loaded to be sliced, measured or drawn without shadows never needs it.
+///
+/// It is found from what the index holds of the object: its simplices with the vertices of
+/// the space its tree holds it in (its own, before its transform, for an object held in its
+/// own space: an affine map keeps a body convex), the exact unit normal n̂ (eq. 6) of each
+/// simplex the tree holds and zero for each it drops (degenerate ones), and whether its shape
+/// is known to be convex. For an object held in its own space through a map that reverses
+/// handedness, the world normals are turned around with the simplices' order
+/// ([`crate::accel::ToObject`]): the side found in its own space is flipped.
+///
+/// The clones share the value (the scenes of animation frames that do not move the object
+/// share its certificate): it is found once. Finding it runs rayon's parallel loops, so it is
+/// not found from inside one (a worker waiting in the search may take up a task of the outer
+/// loop that asks for the same certificate): the traces and probes [`Certificate::find`] their
+/// scene's certificates before their parallel loops ([`crate::scene::Scene::find_certificates`]),
+/// and the loops only [`Certificate::get`] them.
+#[derive(Debug, Clone)]
+pub struct Certificate<const N: usize>(Arc<Lazy<N>>);
+
+/// A [`Certificate`]'s value, once found, and what finding it takes.
+#[derive(Debug)]
+struct Lazy<const N: usize> {
+    /// The value, once found (`None` inside: not convex, or never certified).
+    found: OnceLock<Option<bool>>,
+    /// What finding it takes; `None` for a certificate never found ([`Certificate::none`]).
+    source: Option<Source<N>>,
+}
+
+/// What finding a [`Certificate`] takes besides the object's mesh and which of its simplices
+/// its tree holds.
+#[derive(Debug)]
+struct Source<const N: usize> {
+    /// The vertices the tree holds the object with, when it holds it in its own space.
+    own: Option<Arc<Vec<Vector<N>>>>,
+    /// Its map into its own space reverses handedness: the side found there is flipped.
+    flip: bool,
+    /// Its shape is known to be convex ([`convex_side`]'s `known_convex`).
+    known_convex: bool,
+}
+
+impl<const N: usize> Default for Certificate<N> {
+    fn default() -> Self {
+        Self::none()
+    }
+}
+
+impl<const N: usize> Certificate<N> {
+    /// The certificate of an object that is never certified: `None` (no shadow rays will
+    /// use it, or it is not worth finding: an elevation map, a clip's cap).
+    pub fn none() -> Self {
+        Certificate(Arc::new(Lazy {
+            found: OnceLock::from(None),
+            source: None,
+        }))
+    }
+
+    /// The certificate of an object to be found on first need: held in world space
+    /// (`own` = `None`) or in its own space with the vertices `own`, through a map that
+    /// reverses handedness (`flip`) or not; `known_convex` as [`convex_side`] takes it.
+    pub fn lazy(own: Option<Arc<Vec<Vector<N>>>>, flip: bool, known_convex: bool) -> Self {
+        Certificate(Arc::new(Lazy {
+            found: OnceLock::new(),
+            source: Some(Source {
+                own,
+                flip,
+                known_convex,
+            }),
+        }))
+    }
+
+    /// Whether it is still to be found.
+    pub fn pending(&self) -> bool {
+        self.0.found.get().is_none()
+    }
+
+    /// The side of the body ([`convex_side`], in world space), once found: `None` when the
+    /// object is not convex or not certified. It only reads: [`Certificate::find`] it first.
+    #[inline]
+    pub fn get(&self) -> Option<bool> {
+        debug_assert!(
+            !self.pending(),
+            "a convexity certificate read before it was found"
+        );
+        self.0.found.get().copied().flatten()
+    }
+
+    /// Finds it, unless it is found already, for the object of mesh `mesh` (in world space)
+    /// whose simplex s its tree holds in slot `slots[s]` (`u32::MAX`: dropped, degenerate;
+    /// [`crate::accel::Bvh::id_slots`]). Not from inside a parallel loop (see
+    /// [`Certificate`]). Two threads finding it at once each find the same value (neither
+    /// waits for the other).
+    pub fn find(&self, mesh: &Mesh<N>, slots: &[u32]) {
+        if let (Some(source), true) = (&self.0.source, self.pending()) {
+            let side = source.find(mesh, slots);
+            // (Set by another thread meanwhile: the same value.)
+            let _ = self.0.found.set(side);
+        }
+    }
+}
+
+impl<const N: usize> Source<N> {
+    /// The certificate of the object of mesh `mesh` whose tree holds its simplices in `slots`
+    /// ([`Certificate::find`]). Kept out of the traces' code, which only call it once.
+    #[cold]
+    #[inline(never)]
+    fn find(&self, mesh: &Mesh<N>, slots: &[u32]) -> Option<bool> {
+        // The simplices with the vertices the tree holds them with (a copy, rather than the
+        // build's swap: the scene shares its objects).
+        let own_mesh;
+        let mesh = match &self.own {
+            None => mesh,
+            Some(own) => {
+                own_mesh = Mesh {
+                    vertices: own.to_vec(),
+                    simplices: mesh.simplices.clone(),
+                };
+                &own_mesh
+            }
+        };
+        // The exact normals (the tree's are rounded to f32); the tree holds a simplex exactly
+        // when it prepares ([`crate::accel::PreparedSimplex::new`]), whose normal this is.
+        let normals: Vec<Vector<N>> = (0..mesh.simplices.len())
+            .into_par_iter()
+            .map(|s| match slots[s] {
+                u32::MAX => [0.0; N],
+                _ => hyperplane(&mesh.simplex_points(s)).map_or([0.0; N], |h| h.normal),
+            })
+            .collect();
+        let side = convex_side(mesh, &normals, self.known_convex);
+        side.map(|below| below != self.flip)
+    }
 }
 
 /// The degeneracy measure of a simplex: the length of the generalized cross product of its

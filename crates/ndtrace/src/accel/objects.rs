@@ -2,12 +2,14 @@
 //! `CreateAccelerator`): the scene says what is there ([`AccelObject`]: a mesh, where it is
 //! held, what its shape is known to be), this module decides how to index it — which objects
 //! share a tree and which are held in their own space ([`INSTANCE_MIN`]), the binned SAH build
-//! or the Morton build ([`MORTON_MIN`]), flat cells ([`MIN_CELL`]), convexity certificates
-//! for shadow rays — and what the build costs in memory ([`bvh_bytes`]).
+//! or the Morton build ([`MORTON_MIN`]), flat cells ([`MIN_CELL`]), what the convexity
+//! certificates of shadow rays will be found from ([`ShapeHints::certificate`]; they are found
+//! at the first trace that needs them, not here) — and what the build costs in memory
+//! ([`bvh_bytes`]).
 //!
 //! The steps, for each group of objects sharing a tree:
-//! 1. each simplex prepared once, in simplex order: its build record (box, global id), the f32
-//!    rows of its block lane, and (for the certificates) its normal (`sah_bvh`);
+//! 1. each simplex prepared once, in simplex order: its build record (box, global id) and the
+//!    f32 rows of its block lane (`sah_bvh`);
 //! 2. the flat pieces of hypercubes and of meshes small enough to search, as flat cells;
 //! 3. the SAH tree (or, from [`MORTON_MIN`] simplices, the Morton tree), whose blocks are
 //!    filled from the rows of step 1;
@@ -18,6 +20,7 @@ use super::{
     prefetch_of, simplex_bounds, Bounds, BuildRef, Bvh, ExactSource, FlatCell, Instances, Lane,
     PreparedSimplex, ToObject, EXACT_ROWS_MAX_BYTES, MORTON_MIN,
 };
+use crate::convex::Certificate;
 use crate::linalg::Vector;
 use crate::mesh::Mesh;
 use rayon::prelude::*;
@@ -78,10 +81,29 @@ pub struct ShapeHints {
     pub flat_facets: FlatFacets,
 }
 
+impl ShapeHints {
+    /// The convexity certificate of an object with these hints, held by the index in world
+    /// space (`own` = `None`) or in its own space with the vertices `own` through `map`: to be
+    /// found at the first trace that needs it when shadow rays will use it (`options.shadows`)
+    /// and it is worth finding, else never ([`Certificate`]).
+    pub fn certificate<const N: usize>(
+        &self,
+        options: &AccelOptions,
+        own: Option<Arc<Vec<Vector<N>>>>,
+        map: Option<&ToObject<N>>,
+    ) -> Certificate<N> {
+        match options.shadows && self.certify {
+            true => Certificate::lazy(own, map.is_some_and(|m| m.flip), self.known_convex),
+            false => Certificate::none(),
+        }
+    }
+}
+
 /// How the index is built.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct AccelOptions {
-    /// Shadow rays will be traced: find the objects' convexity certificates.
+    /// Shadow rays will be traced: the objects' convexity certificates will be found (at the
+    /// first trace that needs them, [`ShapeHints::certificate`]).
     pub shadows: bool,
     /// Fewest simplices of a tree built by the Morton build ([`MORTON_MIN`]).
     pub morton_min: usize,
@@ -149,7 +171,7 @@ pub struct Built<const N: usize> {
     offsets: Vec<u32>,
     own: Vec<Option<Arc<Vec<Vector<N>>>>>,
     maps: Vec<Option<ToObject<N>>>,
-    convex: Vec<Option<bool>>,
+    convex: Vec<Certificate<N>>,
 }
 
 /// Builds the index of `objects` (global ids from `offsets`): the untransformed objects and the
@@ -180,29 +202,22 @@ pub fn build_index<const N: usize>(
     groups.extend((0..objects.len()).filter(alone).map(|k| vec![k]));
     let mut tree_of = vec![0u32; objects.len()];
     let mut slots = vec![u32::MAX; total];
-    let mut convex = vec![None; objects.len()];
     let mut trees = Vec::with_capacity(groups.len());
     for (t, members) in groups.iter().enumerate() {
-        let tree = group_tree(
-            objects,
-            (offsets, &mut slots, &mut convex),
-            members,
-            options,
-        );
+        let tree = group_tree(objects, (offsets, &mut slots), members, options);
         members.iter().for_each(|&k| tree_of[k] = t as u32);
         trees.push(tree);
     }
     swap_own(objects);
-    // A certificate found in object space holds in world space (an affine map keeps a body
-    // convex); the world normals are turned around with the simplices' order (`ToObject`).
-    for (c, o) in convex.iter_mut().zip(objects.iter()) {
-        if o.map.is_some_and(|m| m.flip) {
-            *c = c.map(|side| !side);
-        }
-    }
-    let own = objects
+    let own: Vec<_> = objects
         .iter_mut()
         .map(|o| o.own.take().map(Arc::new))
+        .collect();
+    // The certificates are found in the space the trees hold the objects in.
+    let convex = objects
+        .iter()
+        .zip(&own)
+        .map(|(o, own)| o.hints.certificate(options, own.clone(), o.map.as_ref()))
         .collect();
     Built {
         trees,
@@ -217,9 +232,9 @@ pub fn build_index<const N: usize>(
 }
 
 impl<const N: usize> Built<N> {
-    /// Per object, its convexity certificate in world space ([`crate::convex::convex_side`]),
-    /// found when shadow rays will use it.
-    pub fn certificates(&self) -> &[Option<bool>] {
+    /// Per object, its convexity certificate, to be found at the first trace that needs it
+    /// ([`ShapeHints::certificate`]).
+    pub fn certificates(&self) -> &[Certificate<N>] {
         &self.convex
     }
 
@@ -264,17 +279,16 @@ pub struct Rebuilt<const N: usize> {
     tree: Bvh<N>,
     members: Vec<usize>,
     slots: Vec<u32>,
-    convex: Vec<Option<bool>>,
 }
 
 /// [`build_index`] of a frame that moved some objects, for the objects `members` held in world
 /// space by `instances` (the index of the frame before; no object in its own space among
-/// them): their tree built anew over their moved meshes, with their certificates; `convex`
-/// holds every object's certificate before the move.
+/// them): their tree built anew over their moved meshes (global ids from `offsets`; their
+/// certificates are the caller's: [`ShapeHints::certificate`] for those that moved).
 pub fn rebuild_members<const N: usize>(
     instances: &Instances<N>,
     objects: &mut [AccelObject<'_, N>],
-    (offsets, convex): (&[u32], &[Option<bool>]),
+    offsets: &[u32],
     members: &[usize],
     options: &AccelOptions,
 ) -> Rebuilt<N> {
@@ -283,18 +297,11 @@ pub fn rebuild_members<const N: usize>(
         let end = offsets.get(k + 1).map_or(slots.len(), |&e| e as usize);
         slots[offsets[k] as usize..end].fill(u32::MAX);
     }
-    let mut convex = convex.to_vec();
-    let tree = group_tree(
-        objects,
-        (offsets, &mut slots, &mut convex),
-        members,
-        options,
-    );
+    let tree = group_tree(objects, (offsets, &mut slots), members, options);
     Rebuilt {
         tree,
         members: members.to_vec(),
         slots,
-        convex,
     }
 }
 
@@ -302,11 +309,6 @@ impl<const N: usize> Rebuilt<N> {
     /// How many simplices no tree holds.
     pub fn skipped(&self) -> usize {
         self.slots.par_iter().filter(|&&s| s == u32::MAX).count()
-    }
-
-    /// Per object, its convexity certificate (the rebuilt members' found anew).
-    pub fn certificates(&self) -> &[Option<bool>] {
-        &self.convex
     }
 
     /// The instances of `instances` with the rebuilt tree, the objects reached through `maps`
@@ -330,12 +332,11 @@ impl<const N: usize> Rebuilt<N> {
 }
 
 /// The tree of the objects `members` (their meshes in the space the tree is built in), with
-/// their global ids (`offsets`), its slots written into `slots` ([`Bvh::fill_id_slots`]), and
-/// the members' convexity certificates written into `convex` when shadow rays will use them:
-/// the SAH build, or the Morton build from `options.morton_min` simplices.
+/// their global ids (`offsets`), its slots written into `slots` ([`Bvh::fill_id_slots`]): the
+/// SAH build, or the Morton build from `options.morton_min` simplices.
 fn group_tree<const N: usize>(
     objects: &[AccelObject<'_, N>],
-    (offsets, slots, convex): (&[u32], &mut [u32], &mut [Option<bool>]),
+    (offsets, slots): (&[u32], &mut [u32]),
     members: &[usize],
     options: &AccelOptions,
 ) -> Bvh<N> {
@@ -344,7 +345,7 @@ fn group_tree<const N: usize>(
         .map(|&k| objects[k].mesh.simplices.len())
         .sum();
     if count < options.morton_min {
-        let tree = sah_bvh(objects, (offsets, convex), members, options.shadows);
+        let tree = sah_bvh(objects, offsets, members);
         tree.fill_id_slots(slots);
         return tree;
     }
@@ -378,38 +379,7 @@ fn group_tree<const N: usize>(
         ExactSource::none(),
     );
     tree.fill_id_slots(slots);
-    if options.shadows {
-        certify_held(objects, (offsets, convex), members, slots);
-    }
     tree
-}
-
-/// Convexity certificates of the objects `members` of a Morton tree, from the exact normals of
-/// the simplices it holds (`slots` as [`Bvh::id_slots`] gives them; the tree's own normals are
-/// rounded to f32); objects whose hints say not to certify them are left alone.
-fn certify_held<const N: usize>(
-    objects: &[AccelObject<'_, N>],
-    (offsets, convex): (&[u32], &mut [Option<bool>]),
-    members: &[usize],
-    slots: &[u32],
-) {
-    for &i in members {
-        let o = &objects[i];
-        if !o.hints.certify {
-            continue;
-        }
-        let first = offsets[i] as usize;
-        let normals: Vec<Vector<N>> = (first..first + o.mesh.simplices.len())
-            .into_par_iter()
-            .map(|g| match slots[g] {
-                u32::MAX => [0.0; N],
-                // The exact normal (the tree's is rounded to f32), as `sah_bvh` finds it.
-                _ => crate::geometry::hyperplane(&o.mesh.simplex_points(g - first))
-                    .map_or([0.0; N], |h| h.normal),
-            })
-            .collect();
-        convex[i] = crate::convex::convex_side(o.mesh, &normals, o.hints.known_convex);
-    }
 }
 
 /// Where the tree over the objects `members` finds the exact simplex of a global id: their
@@ -482,18 +452,15 @@ pub fn held_box<'a, const N: usize>(
 }
 
 /// The SAH-built BVH over every non-degenerate simplex of the objects `members` (global ids
-/// from `offsets`), and their convexity certificates (into `convex`) when shadow rays will use
-/// them.
+/// from `offsets`).
 fn sah_bvh<const N: usize>(
     objects: &[AccelObject<'_, N>],
-    (offsets, convex): (&[u32], &mut [Option<bool>]),
+    offsets: &[u32],
     members: &[usize],
-    shadows: bool,
 ) -> Bvh<N> {
     // Each simplex's build record (holding, for now, its global id, or `DROPPED` for a
-    // degenerate simplex), the rows its block lane will hold and, for the convexity
-    // certificates, its normal, in one parallel pass in simplex order, so that the fill does
-    // not prepare the simplices again. (The rows, N² f32 per simplex, are alive until the
+    // degenerate simplex) and the rows its block lane will hold, in one parallel pass in
+    // simplex order, so that the fill does not prepare the simplices again. (The rows, N² f32 per simplex, are alive until the
     // blocks are filled; a lane's other part, the simplex's first vertex, is read from the
     // mesh.)
     const DROPPED: u32 = u32::MAX;
@@ -504,7 +471,6 @@ fn sah_bvh<const N: usize>(
     for &k in members {
         let (o, off) = (&objects[k], offsets[k]);
         let mesh = &*o.mesh;
-        let certify = shadows && o.hints.certify;
         let search = match o.hints.flat_facets {
             FlatFacets::Always => true,
             FlatFacets::Search => mesh.simplices.len() <= MAX_FLAT_SEARCH,
@@ -515,38 +481,25 @@ fn sah_bvh<const N: usize>(
             // (The pass runs over increasing s in each task.)
             warm_vertices(mesh, s + AHEAD);
             let pts = mesh.simplex_points(s);
-            let p = PreparedSimplex::new(&pts)?;
-            *r = BuildRef::new(off + s as u32, &simplex_bounds(&pts));
-            *row = Lane::rows_of(&p);
-            Some(p)
+            if let Some(p) = PreparedSimplex::new(&pts) {
+                *r = BuildRef::new(off + s as u32, &simplex_bounds(&pts));
+                *row = Lane::rows_of(&p);
+            }
         };
         let none = BuildRef::new(DROPPED, &([0.0; N], [0.0; N]));
         let mut mine = vec![none; count];
         let mut my_rows = vec![[[0.0; N]; N]; count];
-        let mut normals = vec![[0.0; N]; if certify { count } else { 0 }];
-        let records = mine.par_iter_mut().zip(&mut my_rows).enumerate();
-        if certify {
-            records.zip(&mut normals).for_each(|((s, (r, row)), n)| {
-                if let Some(p) = record(s, r, row) {
-                    *n = p.normal();
-                }
-            });
-        } else {
-            records.for_each(|(s, (r, row))| {
-                record(s, r, row);
-            });
-        }
+        (mine.par_iter_mut().zip(&mut my_rows).enumerate())
+            .for_each(|(s, (r, row))| record(s, r, row));
         dropped += mine.par_iter().filter(|r| r.id == DROPPED).count();
-        if certify {
-            convex[k] = crate::convex::convex_side(mesh, &normals, o.hints.known_convex);
-        }
         if search {
-            // Without certificates the normals are made again where they are needed (no list
-            // of them is kept).
-            let kept = |s: usize| mine[s].id != DROPPED;
-            let normal = |s: usize| match certify {
-                true => kept(s).then(|| normals[s]),
-                false => PreparedSimplex::new(&mesh.simplex_points(s)).map(|p| p.normal()),
+            // The normals are made again where they are needed (no list of them is kept): a
+            // kept simplex's is its hyperplane's ([`PreparedSimplex::normal`]).
+            let normal = |s: usize| match mine[s].id {
+                DROPPED => None,
+                _ => crate::geometry::hyperplane(&mesh.simplex_points(s))
+                    .ok()
+                    .map(|h| h.normal),
             };
             for piece in crate::mesh::flat::flat_pieces(mesh, normal, MIN_CELL) {
                 cells.push((off, piece));

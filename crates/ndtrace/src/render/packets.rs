@@ -59,17 +59,27 @@ pub(super) struct ObjectShading {
     ids: Range<u32>,
     /// Whether they are all the scene's.
     whole_scene: bool,
+    /// Its convexity certificate, when shadow rays are cast ([`crate::convex::Certificate`]).
+    convex: Option<bool>,
 }
 
 impl ObjectShading {
-    /// The constants of every object of `scene`, in object order.
+    /// The constants of every object of `scene`, in object order. When shadow rays will be
+    /// cast, the objects' convexity certificates not found yet are found first (before the
+    /// trace's parallel loops, [`Scene::find_certificates`]).
     pub(super) fn all<const N: usize>(scene: &Scene<N>) -> Vec<Self> {
         let all = 0..scene.simplex_count() as u32;
+        let shadows = scene.render.mode == RenderMode::Shaded && scene.render.shadows;
+        if shadows {
+            scene.find_certificates();
+        }
         (0..scene.objects.len())
             .map(|obj| {
-                let m = &scene.objects[obj].material;
+                let o = &scene.objects[obj];
+                let m = &o.material;
                 let ids = scene.ids(obj);
                 ObjectShading {
+                    convex: shadows.then(|| o.convex.get()).flatten(),
                     ambient: std::array::from_fn(|k| m.ambient[k] * scene.ambient[k] * m.color[k]),
                     diffuse: std::array::from_fn(|k| m.diffuse[k] * m.color[k]),
                     specular: m.specular.iter().any(|&s| s > 0.0),
@@ -298,7 +308,7 @@ fn light_terms<const N: usize, const GOURAUD: bool>(
             let along = dot(&flat, &l) >= 0.0;
             // A convex object lies on one side of the hyperplane: a ray leaving on the other
             // side never meets it again (nor anything, when the object is all the scene).
-            let skips = o.convex == Some(along);
+            let skips = sh.convex == Some(along);
             (!(skips && sh.whole_scene)).then(|| {
                 let (ray, tmax) = shadow_ray(&x, &flat, along, &l, to_light.dist, eps);
                 ShadowRay {

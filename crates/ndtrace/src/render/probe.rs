@@ -54,6 +54,9 @@ impl<'a> ScenePicture<'a> {
         if scene.clips.active() {
             return None;
         }
+        // The crease visibility of a convex object alone asks for its certificate: found
+        // here, before the parallel loops.
+        scene.find_certificates();
         Some(ScenePicture {
             scene,
             culled: scene.render.cull_backfaces.then(|| scene.backfaces()),
@@ -321,7 +324,7 @@ impl SceneProbe for ScenePicture<'_> {
                 continue;
             };
             // The known visibility of creases: a convex object alone among the meshes.
-            let convex = (meshes == 1).then_some(obj.convex).flatten();
+            let convex = (meshes == 1).then(|| obj.convex.get()).flatten();
             let facing = |g: u32| -> bool {
                 let s = &obj.mesh.simplices[(g - first) as usize];
                 let x0 = obj.mesh.vertices[s[0] as usize];

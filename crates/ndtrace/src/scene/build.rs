@@ -98,6 +98,19 @@ impl<const N: usize> Scene<N> {
         self.instances.flat_normal(g)
     }
 
+    /// Finds the objects' convexity certificates not found yet ([`crate::convex::Certificate`]:
+    /// the build leaves them to the first trace or probe that needs them), one object after
+    /// the other. Every trace and probe calls it before its parallel loops, which then only
+    /// read them; not from inside a parallel loop.
+    pub fn find_certificates(&self) {
+        let slots = self.instances.slots();
+        for (k, o) in self.objects.iter().enumerate() {
+            let ids = self.ids(k);
+            o.convex
+                .find(&o.mesh, &slots[ids.start as usize..ids.end as usize]);
+        }
+    }
+
     /// Per global simplex id, whether back-face culling removes it for this camera (course
     /// notes: when det[x_1−x_0 … | C − x_0] < 0, i.e. when its normal points away from the eye).
     pub fn backfaces(&self) -> Vec<bool> {
@@ -215,7 +228,7 @@ pub(crate) fn build_using<const N: usize>(
         build_index(&mut index, &offsets, &options)
     };
     for (o, c) in objects.iter_mut().zip(built.certificates()) {
-        o.convex = *c;
+        o.convex = c.clone();
     }
     let skipped = built.skipped();
     let extent = extent_of(&objects, &offsets, built.slots());

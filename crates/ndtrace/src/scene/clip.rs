@@ -204,7 +204,7 @@ pub(crate) fn clips<const N: usize>(
                 mesh,
                 material,
                 vertex_normals: None,
-                convex: None,
+                convex: crate::convex::Certificate::none(),
                 surface: None,
                 texture: None,
                 own_from_world: parent.own_from_world,

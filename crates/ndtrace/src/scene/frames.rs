@@ -79,25 +79,27 @@ impl<const N: usize> Scene<N> {
         if !same_order {
             return None;
         }
-        // The certificates were found in the objects' own space, as a build of `desc` finds
-        // them.
-        for (o, base) in objects.iter_mut().zip(self.objects.iter()) {
-            o.convex = base.convex;
-        }
         // Smaller ones are held in world space: when one moves, they get a tree of their own,
-        // built over the moved vertices as a build of `desc` prepares them (with their
-        // certificates).
+        // built over the moved vertices as a build of `desc` prepares them.
         let small: Vec<usize> = (0..maps.len())
             .filter(|&k| counts[k] > 0 && !options.own_space(counts[k]))
             .collect();
+        let moved: Vec<usize> = (small.iter().copied())
+            .filter(|&k| objects[k].mesh != self.objects[k].mesh)
+            .collect();
+        // The certificates: an object held in its own space keeps its own (found there, as a
+        // build of `desc` finds it), and so does an unmoved one (maybe found already, by a
+        // trace of this scene); a moved one held in world space gets one to find anew.
+        for (k, (o, base)) in objects.iter_mut().zip(self.objects.iter()).enumerate() {
+            o.convex = match moved.contains(&k) {
+                true => hints(desc.objects[k].shape).certificate(&options, None, None),
+                false => base.convex.clone(),
+            };
+        }
         let boxes = world_boxes(&objects);
-        let (objects, instances) = if small
-            .iter()
-            .all(|&k| objects[k].mesh == self.objects[k].mesh)
-        {
+        let (objects, instances) = if moved.is_empty() {
             (Arc::new(objects), self.instances.moved(maps, &boxes))
         } else {
-            let convex: Vec<Option<bool>> = objects.iter().map(|o| o.convex).collect();
             let rebuilt = {
                 let mut index: Vec<AccelObject<'_, N>> = (objects.iter_mut().zip(&desc.objects))
                     .map(|(o, d)| AccelObject {
@@ -107,20 +109,11 @@ impl<const N: usize> Scene<N> {
                         hints: hints(d.shape),
                     })
                     .collect();
-                rebuild_members(
-                    &self.instances,
-                    &mut index,
-                    (&offsets, &convex),
-                    &small,
-                    &options,
-                )
+                rebuild_members(&self.instances, &mut index, &offsets, &small, &options)
             };
             // A simplex that became degenerate or the reverse changes the warnings: build.
             if rebuilt.skipped() != self.skipped_degenerate {
                 return None;
-            }
-            for (o, c) in objects.iter_mut().zip(rebuilt.certificates()) {
-                o.convex = *c;
             }
             // The moved objects in world space, as this frame's objects hold them.
             let objects = Arc::new(objects);

@@ -10,6 +10,7 @@ use super::fields::{mesh_from_rows, R};
 use super::material::Material;
 use super::mesh_file::{read_mesh, MeshReader};
 use crate::accel::{bvh_bytes, AccelOptions, FlatFacets, ShapeHints, ToObject};
+use crate::convex::Certificate;
 use crate::linalg::{
     add, cofactor_matrix, det, identity, mat_vec, norm, scale, transpose, Matrix, Vector,
 };
@@ -33,9 +34,10 @@ pub struct Object<const N: usize> {
     pub vertex_normals: Option<Vec<Vector<N>>>,
     /// When the mesh bounds a convex body (checked only for scenes with shadows and lights):
     /// whether the body lies on the side of every simplex's hyperplane opposite its normal n̂
-    /// ([`crate::convex::convex_side`]). Shadow rays leaving a simplex away from the body skip
-    /// the object.
-    pub convex: Option<bool>,
+    /// ([`crate::convex::convex_side`]), found at the first trace or probe that needs it
+    /// ([`Scene::find_certificates`](super::Scene::find_certificates)). Shadow rays leaving a
+    /// simplex away from the body skip the object.
+    pub convex: Certificate<N>,
     /// For a `surface` object: its triangles (into `mesh.vertices`; `mesh` has no simplices)
     /// and how they are drawn.
     pub surface: Option<crate::surface::Surface<N>>,
@@ -303,7 +305,8 @@ pub(super) fn world_object<const N: usize>(
         mesh,
         material: mat,
         vertex_normals,
-        convex: None,
+        // (The build's index says what it is found from.)
+        convex: Certificate::none(),
         surface,
         texture,
         own_from_world,

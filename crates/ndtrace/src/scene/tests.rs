@@ -217,3 +217,103 @@ fn array_meshes_build_as_their_inline_lists_and_errors_name_the_row() {
     let wide = with(vec![0.0; 8], 4, s);
     assert!(err(&wide).contains("objects[0].vertices[0]: expected 3 numbers (dim = 3), got 4"));
 }
+
+/// The exact normals of `mesh`'s simplices (zero for a degenerate one), as the certificates
+/// are found from.
+fn exact_normals<const N: usize>(mesh: &crate::mesh::Mesh<N>) -> Vec<crate::linalg::Vector<N>> {
+    (0..mesh.simplices.len())
+        .map(|s| {
+            crate::geometry::hyperplane(&mesh.simplex_points(s)).map_or([0.0; N], |h| h.normal)
+        })
+        .collect()
+}
+
+#[test]
+fn convexity_certificates_are_found_at_the_first_lit_trace_as_convex_side_finds_them() {
+    // 4D: (a) the cross-polytope's boundary given as a mesh (not known convex: every step of
+    // `convex_side`) held in world space, (b) the same mirrored (a map that reverses
+    // handedness) and held in its own space, a mirrored hypercube likewise (known convex),
+    // (c) the mesh with a vertex pushed through its middle (a dent: not convex), (d) an elevation map (never certified); with the SAH
+    // and the Morton builds. The build finds none; a trace finds them, once.
+    let mesh = |dent: f64| {
+        let mut m = crate::shapes::cross_polytope::<4>();
+        m.vertices[0] = crate::linalg::scale(&m.vertices[0], dent);
+        let rows = |v: Vec<String>| format!("[{}]", v.join(", "));
+        format!(
+            "[[objects]]\nshape = \"mesh\"\nvertices = {}\nsimplices = {}\n",
+            rows(m.vertices.iter().map(|v| format!("{v:?}")).collect()),
+            rows(m.simplices.iter().map(|s| format!("{s:?}")).collect()),
+        )
+    };
+    let text = |lights: &str| {
+        format!(
+            "dim = 4\n[camera]\nposition = [0.6, 0.9, 1.3, 3.5]\nlook_at = [0, 0, 0, 0]\n\
+             up = [[0, 1, 0, 0], [0, 0, 1, 0]]\nfov = 50\nresolution = 6\n{lights}{}{}\
+             transform = [{{ scale = [-0.4, 0.4, 0.5, 0.4] }}, {{ translate = [0.8, 0, 0, 0] }}]\n\
+             [[objects]]\nshape = \"hypercube\"\n\
+             transform = [{{ scale = [0.3, -0.3, 0.2, 0.3] }}, {{ translate = [-0.8, 0, 0, 0] }}]\n\
+             {}transform = [{{ translate = [0.0, -0.8, 0.0, 0.0] }}]\n\
+             [[objects]]\nshape = \"elevation\"\n\
+             field = [[[0.0, 0.3], [0.2, 0.9]], [[0.1, 0.5], [0.4, 1.0]]]\nheight = 0.6\n\
+             [render]\nshadows = true\n",
+            mesh(1.0),
+            mesh(1.0),
+            mesh(-0.5),
+        )
+    };
+    let light = "[[lights]]\ntype = \"point\"\nposition = [2, 2, 1, 2]\n";
+    for morton_min in [crate::accel::MORTON_MIN, 0] {
+        let build = |text: &str| {
+            let (desc, _) = load_toml_str(text, "lazy.toml", None).unwrap();
+            // Every transformed object held in its own space.
+            build::build_using::<4>(&desc, None, None, (morton_min, 1)).unwrap()
+        };
+        let s = build(&text(light));
+        assert_eq!(s.instances.instance_count(), 4, "objects 1, 2, 3 alone");
+        assert!(s.instances.map(1).is_some_and(|m| m.flip));
+        let pending: Vec<bool> = s.objects.iter().map(|o| o.convex.pending()).collect();
+        assert_eq!(
+            pending,
+            [true, true, true, true, false],
+            "the build finds none"
+        );
+        assert_eq!(s.objects[4].convex.get(), None, "(d) never certified");
+        crate::render::trace(&s, &Default::default()).unwrap();
+        assert!(
+            s.objects.iter().all(|o| !o.convex.pending()),
+            "the trace finds them"
+        );
+        // What `convex_side` finds on each world mesh (simplices in the order the mirror gave
+        // them), the hypercube known convex.
+        let side = |k: usize, known: bool| {
+            let mesh = &s.objects[k].mesh;
+            crate::convex::convex_side(mesh, &exact_normals(mesh), known)
+        };
+        let found: Vec<Option<bool>> = s.objects.iter().map(|o| o.convex.get()).collect();
+        let expected = [
+            side(0, false),
+            side(1, false),
+            side(2, true),
+            side(3, false),
+            None,
+        ];
+        assert_eq!(found, expected, "morton_min {morton_min}");
+        assert_eq!(found[..4], [Some(true), Some(true), Some(true), None]);
+        // A picture's probe finds them too.
+        let p = build(&text(light));
+        assert!(crate::render::probe::ScenePicture::new(&p).is_some());
+        let found_p: Vec<Option<bool>> = p.objects.iter().map(|o| o.convex.get()).collect();
+        assert_eq!(found_p, found);
+        // (e) Without a light (or without shadows) none is ever to be found.
+        for t in [
+            text(""),
+            text(light).replace("shadows = true", "shadows = false"),
+        ] {
+            let d = build(&t);
+            assert!(d
+                .objects
+                .iter()
+                .all(|o| !o.convex.pending() && o.convex.get().is_none()));
+        }
+    }
+}

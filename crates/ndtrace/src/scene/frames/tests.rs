@@ -231,8 +231,10 @@ fn object_frames_share_the_bvh_and_trace_as_the_frames_built_anew() {
         assert_eq!(reused.instances.cell_count(), built.instances.cell_count());
         assert_eq!(reused.extent.to_bits(), built.extent.to_bits());
         assert_eq!(reused.skipped_degenerate, built.skipped_degenerate);
+        reused.find_certificates();
+        built.find_certificates();
         for (a, b) in reused.objects.iter().zip(built.objects.iter()) {
-            assert_eq!(a.convex, b.convex);
+            assert_eq!(a.convex.get(), b.convex.get());
             assert_eq!(a.mesh, b.mesh);
         }
         for g in 0..built.simplex_count() as u32 {
@@ -375,13 +377,16 @@ fn objects_in_their_own_space_trace_as_their_meshes_moved_into_world_space() {
         // The mirrored, sheared hypercube is known convex, its certificate found in its own
         // space (the reference's mesh of coplanar simplices need not pass); the sphere's is
         // the reference's.
+        s.find_certificates();
+        w.find_certificates();
         assert_eq!(
-            s.objects[0].convex,
+            s.objects[0].convex.get(),
             Some(true),
             "N={N}: the hypercube's certificate"
         );
         assert_eq!(
-            s.objects[1].convex, w.objects[1].convex,
+            s.objects[1].convex.get(),
+            w.objects[1].convex.get(),
             "N={N}: the sphere's"
         );
         for g in 0..s.simplex_count() as u32 {
