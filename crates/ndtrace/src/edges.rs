@@ -38,7 +38,6 @@ use crate::linalg::{dot, mat_vec, sub, transpose, Rgb, Vector};
 use crate::ray::Ray;
 use crate::scene::Scene;
 use crate::NdResult;
-use rayon::prelude::*;
 
 /// Sample rays per retina cell of an edge's projected length.
 pub const SAMPLES_PER_CELL: f64 = 8.0;
@@ -84,28 +83,28 @@ pub fn edge_segments<const N: usize>(
         let culled = culled_once.get_or_init(|| culled(scene));
         let star = star(obj.mesh.vertices.len(), &obj.mesh.simplices);
         let first = scene.offsets[o];
-        let pieces: Vec<Vec<EdgeSegment<N>>> = edges
-            .par_iter()
-            .map(|&[i, j]| {
-                let (a, b) = (obj.mesh.vertices[i as usize], obj.mesh.vertices[j as usize]);
-                // The simplices around the edge's ends: occluders that can hide a sliver next
-                // to a vertex, thinner than the ray samples' spacing.
-                let near: Vec<u32> = star[i as usize]
-                    .iter()
-                    .chain(&star[j as usize])
-                    .map(|&s| first + s)
-                    .collect();
-                split_edge(scene, culled, &near, &a, &b, o)
-                    .into_iter()
-                    .map(|(s0, s1, visible)| EdgeSegment {
-                        a: lerp(&a, &b, s0),
-                        b: lerp(&a, &b, s1),
-                        object: o as u32,
-                        visible,
-                    })
-                    .collect()
-            })
-            .collect();
+        // `par::map_collect` rather than a rayon pipeline: one instantiation of rayon for
+        // every N (this function is compiled per N).
+        let pieces: Vec<Vec<EdgeSegment<N>>> = crate::par::map_collect(edges.len(), 1, |e| {
+            let [i, j] = edges[e];
+            let (a, b) = (obj.mesh.vertices[i as usize], obj.mesh.vertices[j as usize]);
+            // The simplices around the edge's ends: occluders that can hide a sliver next
+            // to a vertex, thinner than the ray samples' spacing.
+            let near: Vec<u32> = star[i as usize]
+                .iter()
+                .chain(&star[j as usize])
+                .map(|&s| first + s)
+                .collect();
+            split_edge(scene, culled, &near, &a, &b, o)
+                .into_iter()
+                .map(|(s0, s1, visible)| EdgeSegment {
+                    a: lerp(&a, &b, s0),
+                    b: lerp(&a, &b, s1),
+                    object: o as u32,
+                    visible,
+                })
+                .collect()
+        });
         out.extend(pieces.into_iter().flatten());
     }
     Ok(out)
@@ -536,7 +535,7 @@ fn split_edge<const N: usize>(
         };
         let first = scene
             .instances
-            .closest_hit(&ray, 0.0, 1.0 - ON_EDGE, accept);
+            .closest_hit(&ray, 0.0, 1.0 - ON_EDGE, &accept);
         let Some(hit) = (if clipped {
             crate::render::clip::nearest_kept(scene, &ray, 0.0, 1.0 - ON_EDGE, &accept, first)
         } else {

@@ -65,6 +65,31 @@ pub fn map_collect<T: Send>(n: usize, min_len: usize, f: impl Fn(usize) -> T + S
     out
 }
 
+/// The items `f(range, out)` pushes onto `out` for the ranges of `0..n` (see [`for_ranges`]),
+/// in the order of the ranges: a parallel `flat_map`/`filter` … `collect` whose result does not
+/// depend on the number of threads, as long as `f` pushes the items of its range in order.
+#[inline]
+pub fn flat_collect<T: Send>(
+    n: usize,
+    min_len: usize,
+    f: impl Fn(Range<usize>, &mut Vec<T>) + Sync,
+) -> Vec<T> {
+    if n == 0 {
+        return Vec::new();
+    }
+    let len = range_len(n, min_len);
+    let parts = map_collect(n.div_ceil(len), 1, |c| {
+        let mut part = Vec::new();
+        f(c * len..((c + 1) * len).min(n), &mut part);
+        part
+    });
+    let mut out = Vec::with_capacity(parts.iter().map(Vec::len).sum());
+    for mut part in parts {
+        out.append(&mut part);
+    }
+    out
+}
+
 /// `op` folded over `f(range)` of the ranges of `0..n` (see [`for_ranges`]), from `identity`.
 /// The ranges depend on the number of threads: `op` must be associative and commutative
 /// exactly (min, max, box unions, the first by index, logical and/or — not floating-point

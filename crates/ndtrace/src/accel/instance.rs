@@ -117,6 +117,16 @@ impl<const N: usize> Instance<N> {
             .is_none_or(|r| r.iter().any(|r| r.contains(&id)))
     }
 
+    /// `accept` restricted to this instance's ids.
+    ///
+    /// The one closure type of a query's `F`: the tree's traversal is instantiated per closure
+    /// type and is most of the code compiled per N, so the one-instance and the many-instance
+    /// paths of a query share it instead of instantiating it twice.
+    #[inline]
+    fn accepting<'a, F: Fn(u32) -> bool>(&'a self, accept: &'a F) -> impl Fn(u32) -> bool + 'a {
+        move |id| self.owns(id) && accept(id)
+    }
+
     /// Whether the world ray can meet this instance's objects with t in [tmin, tmax]: the
     /// slab test of its padded world box, which costs less than mapping the ray and entering
     /// the tree. The box is padded by [`BOUNDS_PAD`] of its diagonal and its farthest
@@ -384,12 +394,17 @@ impl<const N: usize> Instances<N> {
 
     /// Nearest hit with t in (tmin, tmax) among the simplices whose id passes `accept`: the
     /// least (t, id), as [`Bvh::closest_hit`] over all the simplices would give it.
+    ///
+    /// One ray at a time is the cold path (clipped hits traced again, edges, probes; camera
+    /// rays go in packets, [`Instances::closest_hits`]), so `accept` is a `dyn`: every caller
+    /// shares one instantiation of the traversal per N. `accept` runs only on a hit nearer
+    /// than the best so far: the indirect call costs nothing measurable.
     pub fn closest_hit(
         &self,
         ray: &Ray<N>,
         tmin: f64,
         tmax: f64,
-        accept: impl Fn(u32) -> bool,
+        accept: &dyn Fn(u32) -> bool,
     ) -> Option<Hit<N>> {
         let mut best: Option<Hit<N>> = None;
         for i in &self.list {
@@ -401,7 +416,7 @@ impl<const N: usize> Instances<N> {
             }
             let tree = &self.trees[i.tree];
             let r = i.ray(ray);
-            let hit = tree.closest_hit(&r, tmin, hi, |id| i.owns(id) && accept(id));
+            let hit = tree.closest_hit(&r, tmin, hi, i.accepting(&accept));
             if let Some(h) = hit.map(|h| i.to_world(h)) {
                 if better(&h, &best) {
                     best = Some(h);
@@ -428,13 +443,7 @@ impl<const N: usize> Instances<N> {
         if let [i] = &self.list[..] {
             // One instance (a scene of untransformed objects, or of one object): its answers.
             let tree = &self.trees[i.tree];
-            tree.closest_hits(
-                &i.rays(rays),
-                tmin,
-                tmax,
-                |id| i.owns(id) && accept(id),
-                out,
-            );
+            tree.closest_hits(&i.rays(rays), tmin, tmax, i.accepting(&accept), out);
             if i.map.is_some() {
                 out.iter_mut().flatten().for_each(|h| *h = i.to_world(*h));
             }
@@ -449,13 +458,7 @@ impl<const N: usize> Instances<N> {
             }
             let tree = &self.trees[i.tree];
             let mapped = i.rays(rays);
-            tree.closest_hits(
-                &mapped,
-                tmin,
-                tmax,
-                |id| i.owns(id) && accept(id),
-                &mut hits,
-            );
+            tree.closest_hits(&mapped, tmin, tmax, i.accepting(&accept), &mut hits);
             for (o, h) in out.iter_mut().zip(&hits) {
                 if let Some(h) = h.map(|h| i.to_world(h)) {
                     if better(&h, o) {
@@ -467,13 +470,14 @@ impl<const N: usize> Instances<N> {
     }
 
     /// Whether any simplex whose id passes `accept` and lies outside `skip` is hit with t in
-    /// (tmin, tmax) ([`Bvh::any_hit`] in every instance).
+    /// (tmin, tmax) ([`Bvh::any_hit`] in every instance). A `dyn` `accept`, as for
+    /// [`Instances::closest_hit`]: shadow rays of the packets go through [`Instances::any_hits`].
     pub fn any_hit(
         &self,
         ray: &Ray<N>,
         tmin: f64,
         tmax: f64,
-        accept: impl Fn(u32) -> bool,
+        accept: &dyn Fn(u32) -> bool,
         skip: Range<u32>,
     ) -> bool {
         let one = self.list.len() == 1;
@@ -481,8 +485,7 @@ impl<const N: usize> Instances<N> {
             if !one && !i.reaches(ray, tmin, tmax) {
                 return false;
             }
-            let accept = |id| i.owns(id) && accept(id);
-            self.trees[i.tree].any_hit(&i.ray(ray), tmin, tmax, accept, skip.clone())
+            self.trees[i.tree].any_hit(&i.ray(ray), tmin, tmax, i.accepting(&accept), skip.clone())
         })
     }
 
@@ -504,7 +507,7 @@ impl<const N: usize> Instances<N> {
             "any_hits: rays, tmax and out differ in length"
         );
         if let [i] = &self.list[..] {
-            let accept = |id| i.owns(id) && accept(id);
+            let accept = i.accepting(&accept);
             return self.trees[i.tree].any_hits(&i.rays(rays), tmin, tmax, accept, skip, out);
         }
         out.fill(false);
@@ -515,7 +518,7 @@ impl<const N: usize> Instances<N> {
             }
             let tree = &self.trees[i.tree];
             let mapped = i.rays(rays);
-            let accept = |id| i.owns(id) && accept(id);
+            let accept = i.accepting(&accept);
             tree.any_hits(&mapped, tmin, tmax, accept, skip.clone(), &mut blocked);
             for (o, b) in out.iter_mut().zip(&blocked) {
                 *o |= b;

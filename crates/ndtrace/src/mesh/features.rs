@@ -30,9 +30,18 @@
 
 use super::find;
 use crate::linalg::{dot, norm, scale, sub, Vector};
+use crate::par;
 use crate::NdResult;
 use rayon::prelude::*;
 use std::collections::HashMap;
+
+/// Fewest items of a parallel loop's range (the items here are cheap).
+///
+/// The loops go through [`crate::par`], not rayon pipelines: this code is compiled once per
+/// dimension N, and a pipeline would instantiate rayon's machinery for each of its closures.
+/// The sorts keep `par_sort_unstable` on element types that do not depend on N (one
+/// instantiation for all N).
+const PAR_MIN: usize = 256;
 
 /// Largest number of vertices of a face key (a ridge of an 8-D mesh has 7).
 const KEY: usize = 8;
@@ -123,16 +132,15 @@ impl<const N: usize> Ridges<N> {
             });
         }
         // Every (ridge, simplex) incidence, grouped by ridge.
-        let mut inc: Vec<(Key, u32)> = simplices
-            .par_iter()
-            .enumerate()
-            .flat_map_iter(|(s, simplex)| {
-                (0..N).filter_map(move |skip| {
+        let mut inc: Vec<(Key, u32)> = par::flat_collect(simplices.len(), PAR_MIN, |r, out| {
+            for s in r {
+                let simplex = &simplices[s];
+                out.extend((0..N).filter_map(|skip| {
                     let k = key_of((0..N).filter(|&j| j != skip).map(|j| simplex[j]));
                     distinct(&k, N - 1).then_some((k, (s * N + skip) as u32))
-                })
-            })
-            .collect();
+                }));
+            }
+        });
         inc.par_sort_unstable();
         let mut starts = Vec::new();
         for (i, w) in inc.iter().enumerate() {
@@ -156,10 +164,18 @@ impl<const N: usize> Ridges<N> {
         vertices.len() == self.weld.len()
             && simplices.len() == self.simplices.len()
             && weld(vertices) == self.weld
-            && simplices
-                .par_iter()
-                .zip(&self.simplices)
-                .all(|(s, w)| (0..N).all(|k| self.weld.get(s[k] as usize) == Some(&w[k])))
+            && par::reduce_ranges(
+                simplices.len(),
+                PAR_MIN,
+                true,
+                |mut r| {
+                    r.all(|i| {
+                        let (s, w) = (&simplices[i], &self.simplices[i]);
+                        (0..N).all(|k| self.weld.get(s[k] as usize) == Some(&w[k]))
+                    })
+                },
+                |a, b| a && b,
+            )
     }
 
     /// The feature edges of the mesh with these ridges and the coordinates `vertices` (see
@@ -183,14 +199,12 @@ impl<const N: usize> Ridges<N> {
             out.dedup();
             return Ok(out);
         }
-        let normals: Vec<Option<Vector<N>>> = self
-            .simplices
-            .par_iter()
-            .map(|s| {
+        let normals: Vec<Option<Vector<N>>> =
+            par::map_collect(self.simplices.len(), PAR_MIN, |i| {
+                let s = &self.simplices[i];
                 let pts: [Vector<N>; N] = std::array::from_fn(|k| vertices[s[k] as usize]);
                 unit_normal(&pts)
-            })
-            .collect();
+            });
         let mut faces = self.creases(&normals, cos_angle);
         // Down the face dimensions: faces of `m + 1` vertices from those of `m + 2`.
         for m in (2..N - 1).rev() {
@@ -244,11 +258,12 @@ impl<const N: usize> Ridges<N> {
         if normals.iter().all(Option::is_some) {
             // Nothing glued: a ridge's owners are its group's simplices (a simplex with volume
             // has distinct vertices, so it has each ridge once).
-            return (0..self.ridge_count())
-                .into_par_iter()
-                .filter(|&r| crease(self.group(r), N as u32))
-                .map(|r| self.key(r))
-                .collect();
+            return par::flat_collect(self.ridge_count(), PAR_MIN, |r, out| {
+                out.extend(
+                    r.filter(|&r| crease(self.group(r), N as u32))
+                        .map(|r| self.key(r)),
+                );
+            });
         }
         // Zero-volume simplices glue their ridges into one class.
         let mut parent: Vec<u32> = (0..self.ridge_count() as u32).collect();
@@ -373,22 +388,29 @@ fn lower_features<const N: usize>(
     cos_angle: f64,
 ) -> Vec<Key> {
     // Every (face, direction away from it) of the faces above, grouped by face.
-    let mut inc: Vec<(Key, Vector<N>)> = faces
-        .par_iter()
-        .flat_map_iter(|f| {
-            (0..=m).filter_map(move |skip| {
+    let inc: Vec<(Key, Vector<N>)> = par::flat_collect(faces.len(), PAR_MIN, |r, out| {
+        for f in &faces[r] {
+            out.extend((0..=m).filter_map(|skip| {
                 let g = key_of((0..=m).filter(|&j| j != skip).map(|j| f[j]));
                 away(vertices, &g[..m], f[skip]).map(|d| (g, d))
-            })
-        })
+            }));
+        }
+    });
+    // Grouped by face through (face, index) pairs, whose type does not depend on N (see
+    // [`PAR_MIN`]); a group's test below does not depend on the order of its members, and
+    // the faces come out sorted, as a sort of `inc` by face would give them.
+    let mut order: Vec<(Key, usize)> = (inc.iter().enumerate())
+        .map(|(i, (g, _))| (*g, i))
         .collect();
-    inc.par_sort_unstable_by(|a, b| a.0.cmp(&b.0));
-    inc.chunk_by(|a, b| a.0 == b.0)
+    order.par_sort_unstable();
+    let away_of = |i: usize| &inc[i].1;
+    order
+        .chunk_by(|a, b| a.0 == b.0)
         .filter(|group| {
             group.iter().enumerate().any(|(i, a)| {
                 group[i + 1..]
                     .iter()
-                    .any(|b| dot(&a.1, &b.1).abs() < cos_angle)
+                    .any(|b| dot(away_of(a.1), away_of(b.1)).abs() < cos_angle)
             })
         })
         .map(|group| group[0].0)

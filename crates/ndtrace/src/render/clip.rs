@@ -42,7 +42,7 @@ fn keeps<const N: usize>(scene: &Scene<N>, ray: &Ray<N>, hit: &Hit<N>) -> bool {
             // Inside the capped object: its next hit along the ray leaves it.
             let next = scene
                 .instances
-                .closest_hit(ray, hit.t, f64::INFINITY, |id| ids.contains(&id));
+                .closest_hit(ray, hit.t, f64::INFINITY, &|id| ids.contains(&id));
             next.is_some_and(|h| dot(&h.normal, &ray.dir) > 0.0)
         }
     }
@@ -55,7 +55,7 @@ pub fn nearest_kept<const N: usize>(
     ray: &Ray<N>,
     tmin: f64,
     tmax: f64,
-    accept: &impl Fn(u32) -> bool,
+    accept: &dyn Fn(u32) -> bool,
     first: Option<Hit<N>>,
 ) -> Option<Hit<N>> {
     let mut hit = first?;
@@ -70,7 +70,7 @@ pub fn nearest_kept<const N: usize>(
         rejected.push(hit.prim);
         hit = scene
             .instances
-            .closest_hit(ray, tmin, tmax, |id| accept(id) && !rejected.contains(&id))?;
+            .closest_hit(ray, tmin, tmax, &|id| accept(id) && !rejected.contains(&id))?;
     }
 }
 
@@ -83,7 +83,7 @@ pub fn blocks<const N: usize>(
 ) -> bool {
     let first = scene
         .instances
-        .closest_hit(ray, 0.0, tmax, |id| !skip.contains(&id));
+        .closest_hit(ray, 0.0, tmax, &|id| !skip.contains(&id));
     nearest_kept(scene, ray, 0.0, tmax, &|id| !skip.contains(&id), first).is_some()
 }
 

@@ -160,7 +160,7 @@ impl ScenePicture<'_> {
             if scene.render.shadows {
                 let along = dot(&hit.normal, &to.dir) >= 0.0;
                 let (shadow, tmax) = shadow_ray(&x, &hit.normal, along, &to.dir, to.dist, eps);
-                if scene.instances.any_hit(&shadow, 0.0, tmax, |_| true, 0..0) {
+                if scene.instances.any_hit(&shadow, 0.0, tmax, &|_| true, 0..0) {
                     continue;
                 }
             }
@@ -438,7 +438,7 @@ impl SceneProbe for ScenePicture<'_> {
         let scene = self.scene;
         match scene
             .instances
-            .closest_hit(&ray, 0.0, f64::INFINITY, |id| self.accepts(id))
+            .closest_hit(&ray, 0.0, f64::INFINITY, &|id| self.accepts(id))
         {
             None => Probe::MISS,
             Some(hit) => {
@@ -463,7 +463,7 @@ impl SceneProbe for ScenePicture<'_> {
         let ray = self.ray_at(p);
         self.scene
             .instances
-            .any_hit(&ray, 0.0, f64::INFINITY, |id| self.accepts(id), 0..0)
+            .any_hit(&ray, 0.0, f64::INFINITY, &|id| self.accepts(id), 0..0)
     }
 
     fn surface(&self, object: u32, triangle: u32, b: [f64; 3]) -> Option<([f32; 3], f64)> {
@@ -511,9 +511,13 @@ impl SceneProbe for ScenePicture<'_> {
         };
         // A mesh nearer along the point's ray hides it (4D occlusion).
         if depth > 0.0
-            && scene
-                .instances
-                .any_hit(&ray, 0.0, depth * (1.0 - 1e-9), |id| self.accepts(id), 0..0)
+            && scene.instances.any_hit(
+                &ray,
+                0.0,
+                depth * (1.0 - 1e-9),
+                &|id| self.accepts(id),
+                0..0,
+            )
         {
             return None;
         }

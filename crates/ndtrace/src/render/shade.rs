@@ -77,7 +77,7 @@ pub fn shade_hit<const N: usize>(scene: &Scene<N>, ray: &Ray<N>, hit: &Hit<N>) -
         if scene.render.shadows {
             let along = dot(&hit.normal, &l) >= 0.0;
             let (shadow, tmax) = shadow_ray(&x, &hit.normal, along, &l, to_light.dist, eps);
-            if scene.instances.any_hit(&shadow, 0.0, tmax, |_| true, 0..0)
+            if scene.instances.any_hit(&shadow, 0.0, tmax, &|_| true, 0..0)
                 && (!scene.clips.active() || super::clip::blocks(scene, &shadow, tmax, &(0..0)))
             {
                 continue;

@@ -120,7 +120,7 @@ pub(super) fn surface_color<const N: usize>(
                     };
                     if scene
                         .instances
-                        .any_hit(&ray, 0.0, to.dist - eps, |_| true, 0..0)
+                        .any_hit(&ray, 0.0, to.dist - eps, &|_| true, 0..0)
                     {
                         continue;
                     }

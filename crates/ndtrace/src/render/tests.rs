@@ -695,7 +695,7 @@ shadows = {shadows}
     crate::with_scene!(&any, s, M => {
         assert_eq!(M, N);
         let ray = s.camera.ray(&[0.0; N][..N - 1]);
-        let hit = s.instances.closest_hit(&ray, 0.0, f64::INFINITY, |_| true).unwrap();
+        let hit = s.instances.closest_hit(&ray, 0.0, f64::INFINITY, &|_| true).unwrap();
         assert!((hit.t - 3.0).abs() < 1e-12 && s.locate(hit.prim).0 == 0);
         shade_hit(s, &ray, &hit)
     })

@@ -79,12 +79,16 @@ fn trace_cells<const N: usize>(
 ) -> NdResult<Retina> {
     // Back-face culling (course notes): discard a simplex when det[x_1−x_0 … | C − x_0] < 0,
     // i.e. when its normal points away from the eye. The eye is fixed per trace.
-    if scene.render.cull_backfaces {
-        let culled = scene.backfaces();
-        trace_accepting(scene, progress, cells.clone(), |id| !culled[id as usize])
-    } else {
-        trace_accepting(scene, progress, cells.clone(), |_| true)
-    }
+    // One `accept` with culling and without (no list culls nothing): the trace, most of the
+    // code compiled per N, is instantiated once per closure type. `accept` runs only on a hit
+    // nearer than the best so far.
+    let culled = match scene.render.cull_backfaces {
+        true => scene.backfaces(),
+        false => Vec::new(),
+    };
+    trace_accepting(scene, progress, cells.clone(), |id| {
+        culled.is_empty() || !culled[id as usize]
+    })
     .and_then(|mut retina| {
         // Surfaces ("bear hair"), projected over what the rays saw.
         super::splat::splat(scene, &mut retina, cells.start, progress)?;

@@ -113,16 +113,15 @@ impl<const N: usize> Scene<N> {
 
     /// Per global simplex id, whether back-face culling removes it for this camera (course
     /// notes: when det[x_1−x_0 … | C − x_0] < 0, i.e. when its normal points away from the eye).
+    /// (Through [`crate::par`]: this is compiled per N.)
     pub fn backfaces(&self) -> Vec<bool> {
-        (0..self.simplex_count() as u32)
-            .into_par_iter()
-            .map(|g| {
-                let (o, s) = self.locate(g);
-                let obj = &self.objects[o];
-                let x0 = obj.mesh.vertices[obj.mesh.simplices[s][0] as usize];
-                dot(&self.flat_normal(g), &self.camera.toward_eye(&x0)) < 0.0
-            })
-            .collect()
+        crate::par::map_collect(self.simplex_count(), 1024, |g| {
+            let g = g as u32;
+            let (o, s) = self.locate(g);
+            let obj = &self.objects[o];
+            let x0 = obj.mesh.vertices[obj.mesh.simplices[s][0] as usize];
+            dot(&self.flat_normal(g), &self.camera.toward_eye(&x0)) < 0.0
+        })
     }
 }
 

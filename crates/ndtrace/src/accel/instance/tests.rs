@@ -148,20 +148,20 @@ fn instances_answer_as_the_world_space_simplices<const N: usize>() {
         let odd = |id: u32| id % 3 != 1;
         let (mut agree, mut hits) = (0, 0);
         for ray in &rays {
-            let got = inst.closest_hit(ray, 0.0, f64::INFINITY, |_| true);
+            let got = inst.closest_hit(ray, 0.0, f64::INFINITY, &|_| true);
             assert_eq!(
                 got,
                 exact(ray, f64::INFINITY, &|_| true),
                 "N={N} round {round}"
             );
-            let filtered = inst.closest_hit(ray, 0.0, f64::INFINITY, odd);
+            let filtered = inst.closest_hit(ray, 0.0, f64::INFINITY, &odd);
             assert_eq!(
                 filtered,
                 exact(ray, f64::INFINITY, &odd),
                 "N={N} round {round}"
             );
             // Any hit before t = 2: as the exact answer says.
-            let any = inst.any_hit(ray, 0.0, 2.0, |_| true, 0..0);
+            let any = inst.any_hit(ray, 0.0, 2.0, &|_| true, 0..0);
             assert_eq!(any, exact(ray, 2.0, &|_| true).is_some());
             let reference = brute(&world, ray, 0.0, f64::INFINITY, |_| true);
             if let (Some(g), Some(w)) = (got, reference) {
@@ -197,7 +197,7 @@ fn instances_answer_as_the_world_space_simplices<const N: usize>() {
         inst.closest_hits(&rays, 0.0, f64::INFINITY, odd, &mut out);
         let one: Vec<_> = rays
             .iter()
-            .map(|ray| inst.closest_hit(ray, 0.0, f64::INFINITY, odd))
+            .map(|ray| inst.closest_hit(ray, 0.0, f64::INFINITY, &odd))
             .collect();
         assert_eq!(out, one, "N={N} round {round}");
         let tmax: Vec<f64> = (0..rays.len())
@@ -217,14 +217,14 @@ fn instances_answer_as_the_world_space_simplices<const N: usize>() {
         let again = inst.moved(maps.clone(), &boxes);
         assert!((again.trees().iter().zip(inst.trees())).all(|(a, b)| Arc::ptr_eq(a, b)));
         assert_eq!(
-            again.closest_hit(&rays[0], 0.0, f64::INFINITY, |_| true),
+            again.closest_hit(&rays[0], 0.0, f64::INFINITY, &|_| true),
             one_hit(&inst, &rays[0])
         );
     }
 }
 
 fn one_hit<const N: usize>(inst: &Instances<N>, ray: &Ray<N>) -> Option<Hit<N>> {
-    inst.closest_hit(ray, 0.0, f64::INFINITY, |_| true)
+    inst.closest_hit(ray, 0.0, f64::INFINITY, &|_| true)
 }
 
 #[test]
