@@ -283,7 +283,7 @@ pub(super) type ExactRows<const N: usize> = [[[f64; BLOCK_WIDTH]; N]; N];
 /// in 4D). A tree whose exact rows take at most 1 MiB (with its blocks and nodes, about a
 /// quarter of the 2–4 MiB L2 cache of a current core, the bench machine's is 4 MiB) is
 /// compute-bound, so it is tested with exact rows, which need no bound and leave no lane
-/// unsure. Its memory grows by `8·N²` bytes per simplex (128 in 4D), 1 MiB at most per
+/// unsure. Its memory grows by `32·N²` bytes per block (512 in 4D), 1 MiB at most per
 /// scene; larger scenes are unchanged (≤ 150 B/simplex in 4D).
 pub const EXACT_ROWS_MAX_BYTES: usize = 1 << 20;
 
