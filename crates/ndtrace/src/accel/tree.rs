@@ -280,7 +280,7 @@ pub(super) type ExactRows<const N: usize> = [[[f64; BLOCK_WIDTH]; N]; N];
 /// The rows in f32 (1b in the module docs of [`crate::accel`]) save memory bandwidth where a
 /// tree does not fit in a core's caches, and cost compute everywhere: the certified bound on
 /// their rounding more than doubles the instructions of a block test (about 250 against 110
-/// in 4D). A tree whose exact rows take at most 1 MiB (with its blocks and nodes, about a
+/// in 4D). A scene whose trees' exact rows take at most 1 MiB (with blocks and nodes, about a
 /// quarter of the 2–4 MiB L2 cache of a current core, the bench machine's is 4 MiB) is
 /// compute-bound, so it is tested with exact rows, which need no bound and leave no lane
 /// unsure. Its memory grows by `32·N²` bytes per block (512 in 4D), 1 MiB at most per
