@@ -107,27 +107,43 @@ impl<const N: usize> Frustum<N> {
     pub(super) fn of(rays: &[Ray<N>], reach: f64) -> Option<Self> {
         let first = &rays[0];
         let origin = first.origin.map(f64::to_bits);
-        // The sign bits of a direction, one per axis.
-        let signs = |d: &[f64; N]| {
-            let mut m = 0u32;
-            for (i, x) in d.iter().enumerate() {
-                m |= ((x.to_bits() >> 63) as u32) << i;
-            }
-            m
-        };
-        let neg = signs(&first.dir);
+        // Per axis over the rays: the least and greatest `1/d` (as `TraversalRay::new` computes
+        // it), the least |1/d|, and Σ 0·(1/d), which is 0 when every `1/d` is finite and NaN
+        // when one is infinite or NaN. Branch-free float operations on all axes at once, so
+        // that a ray costs a few vector instructions.
         let mut inv_min = [f32::INFINITY; N];
         let mut inv_max = [f32::NEG_INFINITY; N];
-        let mut ok = true;
+        let mut abs_min = [f32::INFINITY; N];
+        let mut poison = [0.0f32; N];
+        let mut same_origin = true;
         for r in rays {
-            ok &= r.origin.map(f64::to_bits) == origin && signs(&r.dir) == neg;
+            same_origin &= r.origin.map(f64::to_bits) == origin;
+            let inv: [f32; N] = std::array::from_fn(|i| 1.0 / r.dir[i] as f32);
             for i in 0..N {
-                // As `TraversalRay::new` computes it.
-                let inv = 1.0 / r.dir[i] as f32;
-                ok &= inv.is_finite() && inv != 0.0;
-                inv_min[i] = if inv < inv_min[i] { inv } else { inv_min[i] };
-                inv_max[i] = if inv > inv_max[i] { inv } else { inv_max[i] };
+                let a = inv[i].abs();
+                poison[i] += 0.0 * inv[i];
+                abs_min[i] = if a < abs_min[i] { a } else { abs_min[i] };
+                inv_min[i] = if inv[i] < inv_min[i] {
+                    inv[i]
+                } else {
+                    inv_min[i]
+                };
+                inv_max[i] = if inv[i] > inv_max[i] {
+                    inv[i]
+                } else {
+                    inv_max[i]
+                };
             }
+        }
+        // Coherent: one origin, every `1/d` finite (no poison) and nonzero, and one sign per
+        // axis. A finite nonzero `1/d` has the sign of d, so the rays' direction signs agree on
+        // an axis exactly when its least and greatest `1/d` do.
+        let mut ok = same_origin;
+        let mut neg = 0u32;
+        for i in 0..N {
+            ok &= poison[i] == 0.0 && abs_min[i] > 0.0;
+            ok &= (inv_min[i] > 0.0) | (inv_max[i] < 0.0);
+            neg |= ((inv_max[i] < 0.0) as u32) << i;
         }
         if !ok {
             return None;

@@ -278,7 +278,33 @@ pub(super) fn blinn_phong<const N: usize>(
     let s = add(l, v);
     let len = norm(&s);
     let h = if len > 0.0 { scale(&s, 1.0 / len) } else { *l };
-    dot(n, &h).max(0.0).powf(shininess)
+    power(dot(n, &h).max(0.0), shininess)
+}
+
+/// Whole exponents up to this are taken by repeated squaring in [`power`].
+const SQUARING_MAX: f64 = 1024.0;
+
+/// `x^s` for the specular factor (x ∈ [0, 1], s ≥ 0): by repeated squaring when s is a whole
+/// number up to [`SQUARING_MAX`] (the usual shininess: a few products instead of a call of
+/// `pow`, which took 7–8 % of a shaded 4D trace), else `powf`. Each squaring at most doubles
+/// the relative error, so it stays below s·2⁻⁵² ≤ 2.3·10⁻¹³ (the retina stores f32); the same
+/// bits on every machine (plain products, no library call).
+#[inline(always)]
+pub(super) fn power(x: f64, s: f64) -> f64 {
+    if !(s <= SQUARING_MAX && s.fract() == 0.0) {
+        return x.powf(s);
+    }
+    let (mut e, mut base, mut acc) = (s as u32, x, 1.0);
+    while e != 0 {
+        if e & 1 == 1 {
+            acc *= base;
+        }
+        e >>= 1;
+        if e != 0 {
+            base *= base;
+        }
+    }
+    acc
 }
 
 /// One light's term a_L · I_L ∘ (`diffuse` · `ndl` + `specular` · `spec`), with `diffuse` the

@@ -1057,3 +1057,40 @@ fn sah_and_morton<const N: usize>(desc: &crate::scene::SceneDesc) -> (Scene<N>, 
     };
     (build(usize::MAX), build(0))
 }
+
+#[test]
+fn the_specular_power_is_powf_within_its_bound() {
+    // Whole exponents up to 1024 by squaring: within s·2⁻⁵² (relative) of the correctly
+    // rounded x^s (powf, itself within an ulp), on random bases and at the ends; other
+    // exponents are powf's bits.
+    use super::shade::power;
+    let mut rng = SplitMix::new(7, 0);
+    let mut unit = || (rng.next() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    for s in (0..=1024u32).chain([20, 32, 64, 100]) {
+        let s = s as f64;
+        for x in (0..64)
+            .map(|_| unit())
+            .chain([0.0, 1.0, 0.5, 1.0 - f64::EPSILON])
+        {
+            let (got, want) = (power(x, s), x.powf(s));
+            let bound = (s + 2.0) * f64::EPSILON * want;
+            assert!(
+                (got - want).abs() <= bound || want < 1e-290,
+                "{x}^{s}: {got} vs {want}"
+            );
+        }
+    }
+    assert_eq!(power(0.0, 0.0), 1.0);
+    assert_eq!(power(0.3, 0.0), 1.0);
+    assert_eq!(power(0.0, 20.0), 0.0);
+    assert_eq!(power(0.5, 3.0), 0.125);
+    for (x, s) in [
+        (0.7, 2.5),
+        (0.7, 1025.0),
+        (0.7, 0.1),
+        (0.9, 2048.0),
+        (0.8, 1e300),
+    ] {
+        assert_eq!(power(x, s).to_bits(), x.powf(s).to_bits(), "{x}^{s}");
+    }
+}

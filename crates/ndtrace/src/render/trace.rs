@@ -8,7 +8,7 @@ use super::sampling::{sample_offsets, SplitMix};
 use super::shade::depth_range;
 use super::tiles::{chunking, tile_order};
 use super::{NearestHit, Progress, Retina};
-use crate::accel::PACKET;
+use crate::accel::{prefetch_of, PACKET};
 use crate::camera::CentreRays;
 use crate::scene::desc::RenderMode;
 use crate::scene::Scene;
@@ -180,6 +180,14 @@ where
                     group_tracer.rays.clear();
                     for s in slots.clone() {
                         let c = cell_of(s);
+                        // The cell's entries are written after the group's trace: ask for
+                        // their lines now, so that those stores do not wait for memory (a
+                        // tile's row writes a few bytes in each row of a 100 MB retina).
+                        prefetch_of(&rgba[c * 4]);
+                        prefetch_of(&depth[c]);
+                        prefetch_of(&normal[c * N]);
+                        prefetch_of(&object_id[c]);
+                        prefetch_of(&primitive_id[c]);
                         if let Some(t) = tiled {
                             let (_, r, col) = t[s];
                             idx = rows[r as usize];

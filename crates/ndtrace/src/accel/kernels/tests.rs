@@ -594,12 +594,16 @@ fn frustum_is_conservative<const N: usize>() {
             (mask, tn)
         );
         let mut met_any = 0;
+        let (mut inv_min, mut inv_max) = ([f32::INFINITY; N], [f32::NEG_INFINITY; N]);
         for (q, ray) in rays.iter().enumerate() {
             let pre = TraversalRay::new(ray, reach);
             assert_eq!(
                 (pre.near, pre.o_near, pre.o_far),
                 (f.near, f.o_near, f.o_far)
             );
+            for i in 0..N {
+                (inv_min[i], inv_max[i]) = (inv_min[i].min(pre.inv[i]), inv_max[i].max(pre.inv[i]));
+            }
             let (m, t) = pre.slab_portable(&node, lo, limit[q]);
             assert_eq!(
                 m & !mask,
@@ -614,24 +618,32 @@ fn frustum_is_conservative<const N: usize>() {
             }
             met_any |= m;
         }
+        // The ends of the rays' own `1/d`, bit for bit.
+        assert_eq!(
+            (f.inv_min.map(f32::to_bits), f.inv_max.map(f32::to_bits)),
+            (inv_min.map(f32::to_bits), inv_max.map(f32::to_bits)),
+            "N={N} case {case}"
+        );
         // Children no ray meets, and those of them the frustum culls.
         met_by_none += (!met_any & 0xff).count_ones() as usize;
         culled += (!mask & !met_any & 0xff).count_ones() as usize;
         // One ray from elsewhere, of another octant, or with a zero, NaN or infinite component:
         // no frustum.
         if count > 1 {
-            let q = r.random_range(1..count);
+            let q = r.random_range(0..count);
             let i = r.random_range(0..N);
-            match r.random_range(0..5) {
+            match r.random_range(0..6) {
                 0 => rays[q].origin[i] += 0.25,
                 1 => rays[q].dir[i] = -rays[q].dir[i],
                 2 => rays[q].dir[i] = [0.0, -0.0][r.random_range(0..2)],
                 3 => rays[q].dir[i] = f64::NAN,
+                4 => rays[q].dir[i] = 1e-300 * dir0[i].signum(),
                 _ => rays[q].dir[i] = f64::INFINITY,
             }
             let same_signs =
                 rays[q].dir.map(f64::is_sign_negative) == dir0.map(f64::is_sign_negative);
-            if rays[q].origin != origin || !same_signs || !rays[q].dir[i].is_normal() {
+            let d = rays[q].dir[i];
+            if rays[q].origin != origin || !same_signs || !(d as f32).is_normal() {
                 refused += 1;
                 assert!(Frustum::of(&rays, reach).is_none(), "N={N} case {case}");
             }
