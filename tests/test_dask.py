@@ -214,6 +214,23 @@ def test_a_ctrl_c_that_python_swallows_in_a_finalizer_still_stops_the_render(cli
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_a_ctrl_c_swallowed_during_the_last_progress_call_still_raises(client):
+    # As above, but the Ctrl-C comes with the last slab's progress: the render is done, and the
+    # call still ends with KeyboardInterrupt (not a retina the user asked to stop).
+    class Finalizer:
+        def __del__(self):
+            signal.raise_signal(signal.SIGINT)
+
+    def progress(done, total):
+        if done == total:
+            Finalizer()
+
+    with pytest.raises(KeyboardInterrupt):
+        ndtrace.trace(_scene(4, [8, 8, 8]), client=client, progress=progress)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
 def test_frames_of_a_worker_that_dies_are_rerun_elsewhere(tmp_path):
     data = ndtrace.load_file(SPIN).to_dict()
     data["camera"]["resolution"] = 80  # frames of about a second: the kill finds one running

@@ -205,6 +205,9 @@ def _gather(client, scatter: Callable[[], Any], submit: Callable[[Any, int, str]
                     progress(done, total)
             with signals.held():
                 del queue, shared
+            # A Ctrl-C kept during the last progress call (or the last futures' release) still
+            # stops the call, as one during any earlier step does.
+            signals.check()
     except BaseException:
         with contextlib.suppress(Exception):
             event.set()
