@@ -191,8 +191,18 @@ def test_ctrl_c_stops_the_running_frames_on_the_workers_and_writes_no_video(tmp_
     assert not [p for p in os.listdir(tmp_path) if p.startswith(".ndtrace-")]
 
 
+@pytest.fixture
+def sigint_handled():
+    """Python's own SIGINT handler during the test, whatever the runner left: a job a shell
+    starts in the background begins with SIGINT ignored, and Python then keeps it ignored (so a
+    raised SIGINT would do nothing)."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
-def test_a_ctrl_c_that_python_swallows_in_a_finalizer_still_stops_the_render(client):
+def test_a_ctrl_c_that_python_swallows_in_a_finalizer_still_stops_the_render(client, sigint_handled):
     # A signal's handler runs wherever the main thread is; in a __del__ (a Dask future's, as a
     # finished one is let go) its KeyboardInterrupt is printed as "Exception ignored" and lost.
     class Finalizer:
@@ -215,7 +225,7 @@ def test_a_ctrl_c_that_python_swallows_in_a_finalizer_still_stops_the_render(cli
 
 
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
-def test_a_ctrl_c_swallowed_during_the_last_progress_call_still_raises(client):
+def test_a_ctrl_c_swallowed_during_the_last_progress_call_still_raises(client, sigint_handled):
     # As above, but the Ctrl-C comes with the last slab's progress: the render is done, and the
     # call still ends with KeyboardInterrupt (not a retina the user asked to stop).
     class Finalizer:
